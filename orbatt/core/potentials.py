@@ -1,0 +1,111 @@
+"""Potentials ``U(q, t)``, their tangential gradients and torques (compiled, no units).
+
+Every potential is extended off the unit sphere as a function of ``q/|q|`` (``DESIGN.md``
+§2): for a raw formula ``U_raw`` homogeneous of degree ``k`` in ``q``,
+``U(q) = U_raw(q) / |q|^k`` and ``dU/dq = (grad U_raw - (q.grad U_raw) q / |q|^2) / |q|^k``.
+With this gradient ``|q| = 1`` and ``q.Q = 0`` are invariants of Hamilton's equations.
+
+A potential is selected by an integer ``kind`` and described by a float64 vector
+``params`` and a 2-D float64 ``table`` (samples for tabulated orbits; empty otherwise):
+
+==================  ====  =====================================================================
+kind                code  params
+==================  ====  =====================================================================
+torque-free         0     (unused)
+heavy top (eq. 18)  1     ``[s Mg, xc1, xc2, xc3]``; ``U = s Mg (q x_c q~)_3``, ``s = +1``
+                          physical (gravity along ``-s3``), ``s = -1`` the paper's printed sign
+gravity gradient,   2     ``[GM, a, e, inc, raan, argp, M0, n]`` (``orbatt.core.kepler``);
+Keplerian orbit           ``U = (3 GM / 2 r^3) x_B.(I x_B)``, eq. 20
+==================  ====  =====================================================================
+"""
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from .kepler import kepler_radial
+from .qalg import qconj, qdot, qmul, qscale
+
+TORQUE_FREE = 0
+HEAVY_TOP = 1
+GRAVITY_GRADIENT_KEPLER = 2
+
+EMPTY_TABLE = np.zeros((0, 0), dtype=np.float64)
+
+
+@nb.njit(cache=True, inline="always")
+def _tangential(q, graw, degree):
+    """Gradient of ``U_raw(q/|q|)`` from the raw gradient of a degree-``degree`` form."""
+    n2 = qdot(q, q)
+    c = qdot(q, graw) / n2
+    s = 1.0 / n2 ** (0.5 * degree)
+    return (
+        s * (graw[0] - c * q[0]),
+        s * (graw[1] - c * q[1]),
+        s * (graw[2] - c * q[2]),
+        s * (graw[3] - c * q[3]),
+    )
+
+
+@nb.njit(cache=True)
+def heavy_top(q, params):
+    """Heavy top, eq. (18) with the sign chosen in ``params[0]``. Returns ``(U, dU/dq)``."""
+    smg = params[0]
+    X = (0.0, params[1], params[2], params[3])
+    # U_raw = s Mg (q X q~)_3 ; grad U_raw = -2 s Mg s3 q X (pure quaternions s3, X)
+    w = qmul(qmul(q, X), qconj(q))
+    graw = qscale(-2.0 * smg, qmul((0.0, 0.0, 0.0, 1.0), qmul(q, X)))
+    n2 = qdot(q, q)
+    return smg * w[3] / n2, _tangential(q, graw, 2)
+
+
+@nb.njit(cache=True)
+def gravity_gradient(q, inertia, k, xhat):
+    """MacCullagh potential, eq. (20), for ``k = GM / r^3`` and radial unit vector ``xhat``
+    (inertial components). Returns ``(U, dU/dq)``."""
+    X = (0.0, xhat[0], xhat[1], xhat[2])
+    xb = qmul(qmul(qconj(q), X), q)
+    Y = (0.0, inertia[0] * xb[1], inertia[1] * xb[2], inertia[2] * xb[3])
+    uraw = 1.5 * k * (xb[1] * Y[1] + xb[2] * Y[2] + xb[3] * Y[3])
+    graw = qscale(-6.0 * k, qmul(qmul(X, q), Y))
+    n2 = qdot(q, q)
+    return uraw / (n2 * n2), _tangential(q, graw, 4)
+
+
+@nb.njit(cache=True)
+def potential(t, q, inertia, kind, params, table):
+    """Dispatch on ``kind``: ``(U, dU/dq)`` at time ``t`` and attitude ``q`` (4-tuple)."""
+    if kind == TORQUE_FREE:
+        return 0.0, (0.0, 0.0, 0.0, 0.0)
+    elif kind == HEAVY_TOP:
+        return heavy_top(q, params)
+    elif kind == GRAVITY_GRADIENT_KEPLER:
+        r, xhat = kepler_radial(t, params[1:])
+        return gravity_gradient(q, inertia, params[0] / (r * r * r), xhat)
+    raise ValueError("unknown potential kind")
+
+
+@nb.njit(cache=True)
+def torque_from_gradient(q, grad):
+    """Body-frame torque ``tau = -1/2 Im(q~ dU/dq)`` for a unit ``q``."""
+    w = qmul(qconj(q), grad)
+    return (-0.5 * w[1], -0.5 * w[2], -0.5 * w[3])
+
+
+@nb.njit(cache=True)
+def evaluate_many(t, q, inertia, kind, params, table):
+    """``U``, ``dU/dq`` and the body torque for arrays ``t (N,)``, ``q (N, 4)``."""
+    n = q.shape[0]
+    U = np.empty(n)
+    grad = np.empty((n, 4))
+    tau = np.empty((n, 3))
+    for i in range(n):
+        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        u, g = potential(t[i], qi, inertia, kind, params, table)
+        U[i] = u
+        tq = torque_from_gradient(qi, g)
+        for k in range(4):
+            grad[i, k] = g[k]
+        for k in range(3):
+            tau[i, k] = tq[k]
+    return U, grad, tau

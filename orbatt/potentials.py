@@ -1,0 +1,99 @@
+"""Potentials acting on the body, with units at the boundary (kernels in
+:mod:`orbatt.core.potentials`).
+
+A potential object knows its kernel ``kind``, ``params`` and ``table`` (what the compiled
+integrators take) and evaluates ``U``, the tangential gradient ``dU/dq`` and the body-frame
+torque for arrays of times and attitudes.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import units as U
+from .body import RigidBody
+from .core import potentials as kp
+from .errors import InputError
+
+
+class Potential:
+    """Base class. Subclasses set ``kind``, ``params``, ``table`` and ``name``.
+
+    ``params``/``table`` are in the internal unit system of the body they are used with
+    (see :mod:`orbatt.units`).
+    """
+
+    kind: int
+    name: str
+    table = kp.EMPTY_TABLE
+
+    def check_body(self, body: RigidBody):
+        """Raise :class:`InputError` if this potential cannot act on ``body``."""
+
+    def evaluate(self, body: RigidBody, t, q):
+        """``(U, dU/dq, torque)`` at times ``t (N,)`` and attitudes ``q (N, 4)``.
+
+        ``U`` in the body's energy unit; ``dU/dq`` (tangential, ``(N, 4)``) in energy unit;
+        torque in body components (``(N, 3)``, energy unit = kg km^2 s^-2 = N km for
+        dimensional bodies).
+        """
+        q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
+        t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
+        return kp.evaluate_many(t, q, body.inertia_value, self.kind, self.params, self.table)
+
+    def describe(self) -> dict:
+        """Plain description (strings and numbers) for Dataset attributes and scenarios."""
+        return {"kind": self.name}
+
+
+class TorqueFree(Potential):
+    """``U = 0``: the free rigid body (paper Sect. 6.1)."""
+
+    kind = kp.TORQUE_FREE
+    name = "torque-free"
+    params = np.zeros(1)
+
+
+class HeavyTop(Potential):
+    """Heavy top in uniform gravity along ``-s3`` (paper eq. 18; ``DESIGN.md`` §3).
+
+    Parameters
+    ----------
+    mass_g : Quantity (force) or float
+        Weight ``M g`` (N, or plain for dimensionless bodies).
+    center_of_mass : Quantity (length) or 3 floats
+        Centre of mass ``x_c`` in body components, relative to the fixed point.
+    sign : {"physical", "paper"}
+        ``"physical"`` (default): ``U = M g z_c`` (the potential energy; torque
+        ``x_c x F_B``). ``"paper"``: eq. (18) as printed, ``U = x_c . F_B = -M g z_c``, as if
+        gravity pointed up - only for reproducing the paper's Fig. 2.
+    """
+
+    kind = kp.HEAVY_TOP
+    name = "heavy-top"
+
+    def __init__(self, mass_g, center_of_mass, sign="physical", *, dimensionless=None):
+        if sign not in ("physical", "paper"):
+            raise InputError(f"potential.sign: {sign!r} is not 'physical' or 'paper'")
+        from astropy import units as u
+
+        if dimensionless is None:
+            dimensionless = not isinstance(mass_g, (u.Quantity, str))
+        self.dimensionless = dimensionless
+        mg = U.strip(mass_g, U.MASS * U.LENGTH / U.TIME**2, "mass_g", allow_plain=dimensionless)
+        xc = U.strip(center_of_mass, U.LENGTH, "center_of_mass", allow_plain=dimensionless)
+        if mg.shape != () or mg < 0:
+            raise InputError(f"mass_g: expected one non-negative weight M g, got {mass_g!r}")
+        if xc.shape != (3,):
+            raise InputError(f"center_of_mass: expected [x, y, z] in body axes, got {center_of_mass!r}")
+        self.sign = sign
+        s = 1.0 if sign == "physical" else -1.0
+        self.params = np.array([s * float(mg), *xc], dtype=np.float64)
+
+    def check_body(self, body):
+        if body.dimensionless != self.dimensionless:
+            raise InputError("potential: heavy-top weight/centre of mass and the body's inertia must be "
+                             "both dimensional or both plain numbers")
+
+    def describe(self):
+        return {"kind": self.name, "mass_g": abs(self.params[0]), "center_of_mass": self.params[1:].tolist(),
+                "sign": self.sign}

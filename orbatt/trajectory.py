@@ -1,0 +1,58 @@
+"""What a propagation returns before it becomes a Dataset: plain arrays plus provenance."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .body import RigidBody
+from .potentials import Potential
+
+
+@dataclass
+class Trajectory:
+    """Result of :func:`orbatt.propagate` (plain floats in the body's internal units).
+
+    Attributes
+    ----------
+    body : RigidBody
+        The body (for an ensemble over bodies: the first one; see ``inertia``).
+    potential : Potential
+        What acted on it (its ``orbit`` attribute, if any, is the orbit provider).
+    t : ndarray (N,)
+        Output times since the epoch (s, or dimensionless).
+    q, Q : ndarray (N, 4) or (E, N, 4)
+        Attitude (body -> space, scalar first) and conjugate momentum at ``t``; a leading
+        ensemble axis ``E`` for ensembles.
+    inertia : ndarray (3,) or (E, 3)
+        Principal moments used (internal unit).
+    method : str
+        Integration method name.
+    settings : dict
+        The method's settings (rtol, atol, step, order, ...), plain values.
+    stats : dict
+        ``steps``, ``rhs_evaluations`` (or ``kicks``), ``rejected_steps``, ``wall_time_s``.
+    complete : bool
+        False if the run was interrupted (KeyboardInterrupt): ``t, q, Q`` then hold what was
+        computed.
+    """
+
+    body: RigidBody
+    potential: Potential
+    t: np.ndarray
+    q: np.ndarray
+    Q: np.ndarray
+    inertia: np.ndarray
+    method: str
+    settings: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+    complete: bool = True
+
+    @property
+    def orbit(self):
+        """The orbit provider driving the potential, or None."""
+        return getattr(self.potential, "orbit", None)
+
+    @property
+    def is_ensemble(self) -> bool:
+        return self.q.ndim == 3
