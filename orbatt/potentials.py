@@ -38,7 +38,7 @@ class Potential:
         """
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
         t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        return kp.evaluate_many(t, q, body.inertia_value, self.kind, self.params, self.table)
+        return kp.evaluate_many(t, q, body.inertia_value, self.kind, self.params, self.table, kp.new_work())
 
     def describe(self) -> dict:
         """Plain description (strings and numbers) for Dataset attributes and scenarios."""

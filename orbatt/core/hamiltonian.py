@@ -8,7 +8,8 @@ is the float64 vector ``(I1, I2, I3)`` of principal moments; ``I0^-1 = 0``. With
 
 (``-1/4 Q (I^-1 (x) Q~ q) = +1/4 Q a`` because ``Q~ q = conj(w)``). ``T = 1/8 a.w``
 (eq. 6). The potential is chosen by ``kind``/``params``/``table``
-(:mod:`orbatt.core.potentials`).
+(:mod:`orbatt.core.potentials`); ``work`` is the per-trajectory scratch array of that
+module.
 """
 from __future__ import annotations
 
@@ -25,14 +26,14 @@ def _a(q, Q, inertia):
 
 
 @nb.njit(cache=True)
-def rhs(t, y, inertia, kind, params, table, dy):
+def rhs(t, y, inertia, kind, params, table, work, dy):
     """Write ``dy/dt`` (eq. 7) into ``dy``; returns nothing."""
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
     _, a = _a(q, Q, inertia)
     qd = qmul(q, a)
     Qd = qmul(Q, a)
-    _, grad = potential(t, q, inertia, kind, params, table)
+    _, grad = potential(t, q, inertia, kind, params, table, work)
     for k in range(4):
         dy[k] = 0.25 * qd[k]
         dy[4 + k] = 0.25 * Qd[k] - grad[k]
@@ -48,8 +49,8 @@ def kinetic(y, inertia):
 
 
 @nb.njit(cache=True)
-def energy(t, y, inertia, kind, params, table):
+def energy(t, y, inertia, kind, params, table, work):
     """Hamiltonian ``H = T + U(q, t)``."""
     q = (y[0], y[1], y[2], y[3])
-    u, _ = potential(t, q, inertia, kind, params, table)
+    u, _ = potential(t, q, inertia, kind, params, table, work)
     return kinetic(y, inertia) + u

@@ -50,6 +50,34 @@ def solve_kepler(M, e):
 
 
 @nb.njit(cache=True)
+def solve_kepler_warm(M, e, work):
+    """:func:`solve_kepler` warm-started from the previous call's ``(M, E)`` kept in
+    ``work[0], work[1]`` (NaN in ``work[0]`` means no previous call). Integrators call the
+    orbit at nearby times, so one or two Halley steps from the linear prediction
+    ``E_prev + (M - M_prev) / (1 - e cos E_prev)`` reach the ulp level; a far jump falls
+    back to the cold solve."""
+    Mp = work[0]
+    if Mp == Mp and abs(M - Mp) < 0.3:
+        Ep = work[1]
+        E = Ep + (M - Mp) / (1.0 - e * math.cos(Ep))
+        for _ in range(8):
+            se = e * math.sin(E)
+            ce = e * math.cos(E)
+            f = E - se - M
+            fp = 1.0 - ce
+            d = -f / (fp - 0.5 * f * se / fp)
+            E += d
+            if abs(d) <= 4e-16 * max(1.0, abs(E)):
+                work[0] = M
+                work[1] = E
+                return E
+    E = solve_kepler(M, e)
+    work[0] = M
+    work[1] = E
+    return E
+
+
+@nb.njit(cache=True)
 def true_anomaly(E, e):
     """True anomaly from the eccentric anomaly (same branch as ``E``)."""
     half = 0.5 * E
@@ -59,10 +87,11 @@ def true_anomaly(E, e):
 
 
 @nb.njit(cache=True)
-def kepler_radial(t, orb):
+def kepler_radial(t, orb, work):
     """Radius and radial unit vector in ``S`` at time ``t``.
 
     Returns ``(r, (x, y, z))``: the orbit radius and ``r_vec / r`` in inertial components.
+    ``work`` is the caller's scratch array (see :func:`solve_kepler_warm`).
     """
     a = orb[0]
     e = orb[1]
@@ -70,7 +99,7 @@ def kepler_radial(t, orb):
     raan = orb[3]
     argp = orb[4]
     M = orb[5] + orb[6] * t
-    E = solve_kepler(M, e)
+    E = solve_kepler_warm(M, e, work)
     r = a * (1.0 - e * math.cos(E))
     f = true_anomaly(E, e)
     u = argp + f

@@ -5,6 +5,10 @@ Every potential is extended off the unit sphere as a function of ``q/|q|`` (``DE
 ``U(q) = U_raw(q) / |q|^k`` and ``dU/dq = (grad U_raw - (q.grad U_raw) q / |q|^2) / |q|^k``.
 With this gradient ``|q| = 1`` and ``q.Q = 0`` are invariants of Hamilton's equations.
 
+Every kernel also takes ``work``, a per-trajectory float64 scratch array of length
+:data:`WORK_SIZE` filled with NaN at the start of a run (warm starts, e.g. of Kepler's
+equation; see :func:`new_work`).
+
 A potential is selected by an integer ``kind`` and described by a float64 vector
 ``params`` and a 2-D float64 ``table`` (samples for tabulated orbits; empty otherwise):
 
@@ -31,6 +35,12 @@ HEAVY_TOP = 1
 GRAVITY_GRADIENT_KEPLER = 2
 
 EMPTY_TABLE = np.zeros((0, 0), dtype=np.float64)
+WORK_SIZE = 4
+
+
+def new_work(*batch):
+    """Fresh scratch array(s) of shape ``batch + (WORK_SIZE,)``, all NaN."""
+    return np.full(batch + (WORK_SIZE,), np.nan)
 
 
 @nb.njit(cache=True, inline="always")
@@ -73,14 +83,14 @@ def gravity_gradient(q, inertia, k, xhat):
 
 
 @nb.njit(cache=True)
-def potential(t, q, inertia, kind, params, table):
+def potential(t, q, inertia, kind, params, table, work):
     """Dispatch on ``kind``: ``(U, dU/dq)`` at time ``t`` and attitude ``q`` (4-tuple)."""
     if kind == TORQUE_FREE:
         return 0.0, (0.0, 0.0, 0.0, 0.0)
     elif kind == HEAVY_TOP:
         return heavy_top(q, params)
     elif kind == GRAVITY_GRADIENT_KEPLER:
-        r, xhat = kepler_radial(t, params[1:])
+        r, xhat = kepler_radial(t, params[1:], work)
         return gravity_gradient(q, inertia, params[0] / (r * r * r), xhat)
     raise ValueError("unknown potential kind")
 
@@ -93,7 +103,7 @@ def torque_from_gradient(q, grad):
 
 
 @nb.njit(cache=True)
-def evaluate_many(t, q, inertia, kind, params, table):
+def evaluate_many(t, q, inertia, kind, params, table, work):
     """``U``, ``dU/dq`` and the body torque for arrays ``t (N,)``, ``q (N, 4)``."""
     n = q.shape[0]
     U = np.empty(n)
@@ -101,7 +111,7 @@ def evaluate_many(t, q, inertia, kind, params, table):
     tau = np.empty((n, 3))
     for i in range(n):
         qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        u, g = potential(t[i], qi, inertia, kind, params, table)
+        u, g = potential(t[i], qi, inertia, kind, params, table, work)
         U[i] = u
         tq = torque_from_gradient(qi, g)
         for k in range(4):
