@@ -29,7 +29,7 @@ def _unit_quaternion(q, name="q"):
         raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
     bad = np.abs(n - 1.0) > UNIT_TOLERANCE
     if np.any(bad):
-        raise InputError(f"{name}: |q| = {np.asarray(n)[bad].ravel()[0]!r} is not 1 (tolerance "
+        raise InputError(f"{name}: |q| = {float(np.asarray(n)[bad].ravel()[0]):.10g} is not 1 (tolerance "
                          f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
     return q / n[..., None]
 
@@ -64,8 +64,8 @@ class State:
         scale = qt.norm(Qv)
         bad = np.abs(qQ) > TANGENT_TOLERANCE * scale
         if np.any(bad):
-            raise InputError(f"Q: q.Q = {np.asarray(qQ)[bad].ravel()[0]!r} is not ~0 (|Q| = "
-                             f"{np.asarray(scale)[bad].ravel()[0]!r}); Q must be tangent to the unit sphere "
+            raise InputError(f"Q: q.Q = {float(np.asarray(qQ)[bad].ravel()[0]):.6g} is not ~0 (|Q| = "
+                             f"{float(np.asarray(scale)[bad].ravel()[0]):.6g}); Q must be tangent to the unit sphere "
                              "at q (Q = 2 q g): build it with State.from_omega or State.from_momentum")
         self.Q = Qv
         #: ``q.Q`` of the given data (0 for states built from rates or momenta)
