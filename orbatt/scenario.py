@@ -1,0 +1,340 @@
+"""Scenario files (TOML): schema, validation, and the objects they build.
+
+A scenario describes one study; :func:`load_scenario` validates it completely (unknown keys
+and tables are refused, every quantity is checked for its dimension) and returns a
+:class:`Scenario` whose :meth:`Scenario.run` returns the result Dataset.
+
+Schema (the contract other tools read; quantities are strings astropy parses, e.g.
+``"7000 km"``, ``"30 deg"``, ``"0.001 rad / s"``; plain numbers mean dimensionless)::
+
+    name = "..."                  # optional; defaults to the file name
+    description = "..."           # optional, one line
+    [body]        inertia = [I1, I2, I3]; heavy top: mass_g, center_of_mass = [x, y, z]
+    [initial]     q = [...] and Q = [...]
+                  | q = [...] or euler_313 = [phi, theta, psi], with omega = [w1, w2, w3]
+                  | euler_313 with euler_momenta = [Phi, Theta, Psi]
+                  frame = "inertial" (default) | "orbital"
+    [potential]   kind = "torque-free" | "heavy-top" | "gravity-gradient"
+                  sign = "physical" (default) | "paper"        (heavy top)
+    [orbit]       provider = "kepler" | "rebound"; central_body = "earth" | gm = "..."
+                  a, e, i, raan, argp, and one of true_anomaly | mean_anomaly
+                  epoch (ISO UTC); rebound: perturbations = ["j2", "moon", "sun"], integrator
+    [integration] method, rtol, atol | step, t_end, output_step
+                  (times: a time, a plain number if dimensionless, or "N orbits")
+
+Outputs fall exactly on ``k * output_step`` for ``k = 0 .. floor(t_end / output_step)``.
+``Q`` is in the unit implied by the inertia and time units (kg km^2 s^-1 for a dimensional
+body; plain numbers for a dimensionless one).
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from astropy import units as u
+
+from . import units as U
+from .body import RigidBody
+from .errors import InputError
+
+# ---- schema ------------------------------------------------------------------------------
+TOP_KEYS = {"name", "description"}
+TABLES = {
+    "body": {"inertia", "mass_g", "center_of_mass"},
+    "initial": {"q", "Q", "omega", "euler_313", "euler_momenta", "frame"},
+    "potential": {"kind", "sign"},
+    "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
+              "mean_anomaly", "epoch", "perturbations", "integrator"},
+    "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
+    "sweep": None,  # validated by orbatt.sweep when present
+}
+REQUIRED_TABLES = ("body", "initial", "potential", "integration")
+POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
+FRAMES = ("inertial", "orbital")
+PROVIDERS = ("kepler", "rebound")
+
+
+class ScenarioError(InputError):
+    """A scenario file is malformed; the message names the file, table, key, value and fix."""
+
+
+@dataclass
+class _Ctx:
+    source: str
+
+    def error(self, where, msg):
+        return ScenarioError(f"{self.source}: {where}: {msg}")
+
+
+def _quantity(ctx, where, value, unit, *, dimensionless):
+    """Parse one scalar: a Quantity string, or a plain number when ``dimensionless`` (or when
+    ``unit`` is dimensionless)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise ctx.error(where, f"{value!r} is not a number or a quantity string")
+    if isinstance(value, str):
+        try:
+            q = u.Quantity(value)
+        except (TypeError, ValueError):
+            raise ctx.error(where, f"cannot parse {value!r} as a quantity; write e.g. '1 {unit.to_string()}'") from None
+        if dimensionless and unit not in (U.DIMENSIONLESS, U.ANGLE) and q.unit != U.DIMENSIONLESS:
+            raise ctx.error(where, f"{value!r} has a unit but the scenario is dimensionless (plain-number "
+                                  "inertia); give a plain number or give the inertia with units")
+        try:
+            eq = u.dimensionless_angles() if unit == U.ANGLE else []
+            return float(q.to_value(unit, equivalencies=eq))
+        except u.UnitConversionError:
+            raise ctx.error(where, f"{value!r} has the wrong dimension; expected a {unit.physical_type} such "
+                                  f"as '1 {unit.to_string()}'") from None
+    x = float(value)
+    if not math.isfinite(x):
+        raise ctx.error(where, f"{value!r} is not finite")
+    if unit in (U.DIMENSIONLESS, U.ANGLE) or dimensionless:
+        return x
+    raise ctx.error(where, f"{value!r} has no unit; write it as a quantity string such as '{value} {unit.to_string()}'")
+
+
+def _vector(ctx, where, value, n, unit, *, dimensionless):
+    if not isinstance(value, list) or len(value) != n:
+        raise ctx.error(where, f"expected a list of {n} values, got {value!r}")
+    return np.array([_quantity(ctx, f"{where}[{k}]", v, unit, dimensionless=dimensionless)
+                     for k, v in enumerate(value)])
+
+
+def _plain_vector(ctx, where, value, n):
+    if not isinstance(value, list) or len(value) != n or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        raise ctx.error(where, f"expected a list of {n} plain numbers, got {value!r}")
+    a = np.array(value, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise ctx.error(where, f"{value!r} contains non-finite numbers")
+    return a
+
+
+def _check_keys(ctx, data):
+    for key, val in data.items():
+        if key in TABLES:
+            if not isinstance(val, dict):
+                raise ctx.error(key, f"must be a table [{key}], got {val!r}")
+            allowed = TABLES[key]
+            if allowed is None:
+                continue
+            for k in val:
+                if k not in allowed:
+                    raise ctx.error(f"[{key}] {k}", f"unknown key; allowed keys in [{key}]: {', '.join(sorted(allowed))}")
+        elif key not in TOP_KEYS:
+            raise ctx.error(key, f"unknown table or key; allowed: {', '.join(sorted(TOP_KEYS | set(TABLES)))}")
+    for t in REQUIRED_TABLES:
+        if t not in data:
+            raise ctx.error(f"[{t}]", f"missing table; every scenario needs {', '.join('[' + x + ']' for x in REQUIRED_TABLES)}")
+
+
+def _choice(ctx, where, value, choices):
+    if value not in choices:
+        raise ctx.error(where, f"{value!r} is not one of {', '.join(repr(c) for c in choices)}")
+    return value
+
+
+@dataclass
+class Spec:
+    """The validated content of a scenario file, in internal units (plain floats)."""
+
+    name: str
+    description: str
+    text: str
+    dimensionless: bool
+    inertia: np.ndarray
+    potential_kind: str
+    heavy_top: dict = field(default_factory=dict)
+    initial: dict = field(default_factory=dict)
+    frame: str = "inertial"
+    orbit: dict | None = None
+    integration: dict = field(default_factory=dict)
+    sweep: dict | None = None
+
+
+def parse(text: str, source: str = "<scenario>") -> Spec:
+    """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field."""
+    ctx = _Ctx(source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ctx.error("TOML", f"{exc}; fix the syntax") from None
+    _check_keys(ctx, data)
+    body = data["body"]
+    if "inertia" not in body:
+        raise ctx.error("[body] inertia", "missing; give the principal moments [I1, I2, I3]")
+    inertia_raw = body["inertia"]
+    if not isinstance(inertia_raw, list) or len(inertia_raw) != 3:
+        raise ctx.error("[body] inertia", f"expected [I1, I2, I3], got {inertia_raw!r}")
+    dimless = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in inertia_raw)
+    inertia = _vector(ctx, "[body] inertia", inertia_raw, 3, U.INERTIA, dimensionless=dimless)
+    try:  # the body's own validation (positive, triangle inequality), reported with the file
+        RigidBody(inertia if dimless else inertia * U.INERTIA)
+    except InputError as exc:
+        raise ctx.error("[body] inertia", f"{inertia_raw!r}: {exc}") from None
+
+    pot = data["potential"]
+    kind = _choice(ctx, "[potential] kind", pot.get("kind"), POTENTIAL_KINDS)
+    heavy = {}
+    if kind == "heavy-top":
+        for k in ("mass_g", "center_of_mass"):
+            if k not in body:
+                raise ctx.error(f"[body] {k}", "missing; the heavy top needs mass_g (M g) and center_of_mass")
+        force = U.MASS * U.LENGTH / U.TIME**2
+        heavy["mass_g"] = _quantity(ctx, "[body] mass_g", body["mass_g"], force, dimensionless=dimless)
+        if heavy["mass_g"] < 0:
+            raise ctx.error("[body] mass_g", f"{body['mass_g']!r} must be non-negative")
+        heavy["center_of_mass"] = _vector(ctx, "[body] center_of_mass", body["center_of_mass"], 3, U.LENGTH,
+                                          dimensionless=dimless)
+        heavy["sign"] = _choice(ctx, "[potential] sign", pot.get("sign", "physical"), ("physical", "paper"))
+    else:
+        for k in ("mass_g", "center_of_mass"):
+            if k in body:
+                raise ctx.error(f"[body] {k}", f"only used by kind = 'heavy-top' (this scenario is {kind!r}); remove it")
+        if "sign" in pot:
+            raise ctx.error("[potential] sign", "only used by kind = 'heavy-top'; remove it")
+
+    orbit = None
+    if kind == "gravity-gradient":
+        if "orbit" not in data:
+            raise ctx.error("[orbit]", "missing table; the gravity-gradient potential needs an orbit")
+        if dimless:
+            raise ctx.error("[body] inertia", "the gravity-gradient potential needs a dimensional inertia "
+                                              "(e.g. '400 kg km2') to go with the orbit's units")
+        orbit = _parse_orbit(ctx, data["orbit"])
+    elif "orbit" in data:
+        raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
+
+    init = data["initial"]
+    frame = _choice(ctx, "[initial] frame", init.get("frame", "inertial"), FRAMES)
+    if frame == "orbital" and orbit is None:
+        raise ctx.error("[initial] frame", "'orbital' needs an [orbit]; use frame = 'inertial'")
+    initial = _parse_initial(ctx, init, dimless)
+
+    integ = _parse_integration(ctx, data["integration"], dimless, orbit)
+    name = data.get("name", Path(source).stem)
+    desc = data.get("description", "")
+    if not isinstance(name, str) or not isinstance(desc, str):
+        raise ctx.error("name/description", "must be strings")
+    return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
+                potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
+                integration=integ, sweep=data.get("sweep"))
+
+
+def _parse_orbit(ctx, o):
+    out = {}
+    out["provider"] = _choice(ctx, "[orbit] provider", o.get("provider", "kepler"), PROVIDERS)
+    if "gm" in o and "central_body" in o:
+        raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
+    if "gm" in o:
+        out["gm"] = _quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False)
+        if out["gm"] <= 0:
+            raise ctx.error("[orbit] gm", f"{o['gm']!r} must be positive")
+        out["central_body"] = None
+    else:
+        out["central_body"] = _choice(ctx, "[orbit] central_body", o.get("central_body", "earth"), ("earth",))
+    for k in ("a", "e", "i", "raan", "argp"):
+        if k not in o:
+            raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
+    out["a"] = _quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False)
+    if out["a"] <= 0:
+        raise ctx.error("[orbit] a", f"{o['a']!r} must be positive (elliptic orbits only)")
+    out["e"] = _quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
+    if not 0 <= out["e"] < 1:
+        raise ctx.error("[orbit] e", f"{o['e']!r} is outside [0, 1): only elliptic orbits are supported")
+    for k in ("i", "raan", "argp"):
+        out[k] = _quantity(ctx, f"[orbit] {k}", o[k], U.ANGLE, dimensionless=False)
+    anomalies = [k for k in ("true_anomaly", "mean_anomaly") if k in o]
+    if len(anomalies) != 1:
+        raise ctx.error("[orbit] true_anomaly", "give exactly one of true_anomaly or mean_anomaly")
+    out["anomaly_kind"] = anomalies[0]
+    out["anomaly"] = _quantity(ctx, f"[orbit] {anomalies[0]}", o[anomalies[0]], U.ANGLE, dimensionless=False)
+    if "epoch" in o:
+        from astropy.time import Time
+
+        try:
+            out["epoch"] = Time(str(o["epoch"]), scale="utc")
+        except ValueError:
+            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
+    else:
+        out["epoch"] = None
+    if out["provider"] == "rebound":
+        pert = o.get("perturbations", [])
+        if not isinstance(pert, list):
+            raise ctx.error("[orbit] perturbations", f"expected a list such as ['j2'], got {pert!r}")
+        for p in pert:
+            _choice(ctx, "[orbit] perturbations", p, ("j2", "moon", "sun"))
+        if ("moon" in pert or "sun" in pert) and out["epoch"] is None:
+            raise ctx.error("[orbit] epoch", "third bodies (moon, sun) need an epoch to place them")
+        out["perturbations"] = list(pert)
+        out["integrator"] = _choice(ctx, "[orbit] integrator", o.get("integrator", "ias15"), ("ias15", "whfast"))
+    else:
+        for k in ("perturbations", "integrator"):
+            if k in o:
+                raise ctx.error(f"[orbit] {k}", "only used by provider = 'rebound'; remove it or switch provider")
+    return out
+
+
+def _parse_initial(ctx, init, dimless):
+    has = {k for k in ("q", "Q", "omega", "euler_313", "euler_momenta") if k in init}
+    valid = ({"q", "Q"}, {"q", "omega"}, {"euler_313", "omega"}, {"euler_313", "euler_momenta"})
+    if has not in valid:
+        raise ctx.error("[initial]", f"got keys {sorted(has)}; give one of: q and Q | q and omega | "
+                                     "euler_313 and omega | euler_313 and euler_momenta")
+    out = {}
+    if "q" in has:
+        q = _plain_vector(ctx, "[initial] q", init["q"], 4)
+        n = float(np.linalg.norm(q))
+        if abs(n - 1) > 1e-6:
+            raise ctx.error("[initial] q", f"{init['q']!r} has |q| = {n:.9g}, not 1; give a unit quaternion "
+                                           "(scalar first q0, q1, q2, q3)")
+        out["q"] = q / n
+    else:
+        out["euler_313"] = _vector(ctx, "[initial] euler_313", init["euler_313"], 3, U.ANGLE, dimensionless=True)
+    if "Q" in has:
+        out["Q"] = _plain_vector(ctx, "[initial] Q", init["Q"], 4)
+    if "omega" in has:
+        out["omega"] = _vector(ctx, "[initial] omega", init["omega"], 3, U.RATE, dimensionless=dimless)
+    if "euler_momenta" in has:
+        out["euler_momenta"] = _vector(ctx, "[initial] euler_momenta", init["euler_momenta"], 3, U.MOMENTUM,
+                                       dimensionless=dimless)
+    return out
+
+
+def _time(ctx, where, value, dimless, orbit):
+    if isinstance(value, str) and value.strip().endswith(("orbits", "orbit")):
+        num = value.strip().split()[0]
+        try:
+            n = float(num)
+        except ValueError:
+            raise ctx.error(where, f"{value!r}: write 'N orbits' with a number N") from None
+        if orbit is None:
+            raise ctx.error(where, f"{value!r} needs an [orbit]; give a time such as '100 s'")
+        return ("orbits", n)
+    return ("time", _quantity(ctx, where, value, U.TIME, dimensionless=dimless))
+
+
+def _parse_integration(ctx, g, dimless, orbit):
+    from .propagate import METHODS
+
+    out = {"method": g.get("method", "dop853")}
+    if out["method"] not in METHODS:
+        raise ctx.error("[integration] method", f"{out['method']!r} is not one of {', '.join(sorted(METHODS))}")
+    for k in ("rtol", "atol"):
+        if k in g:
+            v = g[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (v > 0 and math.isfinite(v)):
+                raise ctx.error(f"[integration] {k}", f"{v!r} must be a positive number")
+            out[k] = float(v)
+    if "step" in g:
+        out["step"] = _time(ctx, "[integration] step", g["step"], dimless, orbit)
+    for k in ("t_end", "output_step"):
+        if k not in g:
+            raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")
+        out[k] = _time(ctx, f"[integration] {k}", g[k], dimless, orbit)
+        if out[k][1] <= 0:
+            raise ctx.error(f"[integration] {k}", f"{g[k]!r} must be positive")
+    return out
