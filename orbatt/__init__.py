@@ -5,10 +5,17 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from . import canonical, euler, quaternion
+from .aem import read_aem, write_aem
 from .body import RigidBody
+from .dataset import open_dataset, to_dataset
 from .errors import InputError, IntegrationError, OrbattError
 from .potentials import HeavyTop, Potential, TorqueFree
+from .propagate import propagate
 from .state import State
+from . import orbital
+from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to_orbital
+from .orbits import KeplerOrbit, ReboundOrbit
+from .potentials import GravityGradient
 
 try:
     __version__ = _version("orbatt")
@@ -16,7 +23,10 @@ except PackageNotFoundError:  # pragma: no cover - source tree without install
     __version__ = "0+unknown"
 
 __all__ = [
-    "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop",
+    "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate",
     "OrbattError", "InputError", "IntegrationError",
     "quaternion", "canonical", "euler", "__version__",
+    "KeplerOrbit", "ReboundOrbit", "GravityGradient", "orbital",
+    "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
+    "to_dataset", "open_dataset", "write_aem", "read_aem",
 ]

@@ -97,3 +97,61 @@ class HeavyTop(Potential):
     def describe(self):
         return {"kind": self.name, "mass_g": abs(self.params[0]), "center_of_mass": self.params[1:].tolist(),
                 "sign": self.sign}
+
+
+class GravityGradient(Potential):
+    """Gravity-gradient (MacCullagh) potential of a point-mass central body, eq. (20)
+    (``DESIGN.md`` §3), driven by an orbit provider (:mod:`orbatt.orbits`).
+
+    ``U = (3 GM / 2 r^3) x_B . (I x_B)`` with ``x_B = q~ X q`` the radial unit vector in
+    body components (``X = p s1 p~``); tangential gradient (extension as a function of
+    ``q/|q|``); body torque ``(3 GM / r^3) x_B x (I x_B)``. The kernel takes ``r`` and
+    ``x_S`` from the orbit without returning to Python: Kepler's equation solved in the
+    kernel (:class:`~orbatt.orbits.KeplerOrbit`, kind 2), or the REBOUND samples
+    interpolated in the kernel (:class:`~orbatt.orbits.ReboundOrbit`, kind 3).
+
+    Parameters
+    ----------
+    orbit : OrbitProvider
+        The orbit (times in seconds since its epoch). Acts on dimensional bodies only
+        (inertia in kg km^2; energies in kg km^2 s^-2, torques in N km).
+
+    Attributes
+    ----------
+    orbit : OrbitProvider
+    kind, params, table
+        The provider's kernel specification (:meth:`OrbitProvider.kernel`).
+    """
+
+    name = "gravity-gradient"
+    dimensionless = False
+
+    def __init__(self, orbit):
+        from .orbits.base import OrbitProvider
+
+        if not isinstance(orbit, OrbitProvider):
+            raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got "
+                             f"{type(orbit).__name__}")
+        self.orbit = orbit
+        self.kind, self.params, self.table = orbit.kernel()
+
+    def check_body(self, body):
+        if body.dimensionless:
+            raise InputError("body: the gravity-gradient potential needs a dimensional body (GM is in km^3/s^2); "
+                             "give the inertia as a Quantity, e.g. [400, 500, 600] * u.kg * u.km**2")
+
+    def evaluate(self, body, t, q):
+        """``(U, dU/dq, torque)`` at times ``t`` (s since the orbit's epoch) and attitudes
+        ``q (N, 4)``: ``U`` in kg km^2 s^-2, ``dU/dq`` ``(N, 4)``, body torque ``(N, 3)`` in
+        kg km^2 s^-2 (N km)."""
+        self.check_body(body)
+        if self.kind == kp.GRAVITY_GRADIENT_SAMPLED:
+            tt = np.asarray(t, dtype=np.float64)
+            lo, hi = self.params[1], self.params[2]
+            if tt.size and (np.min(tt) < lo or np.max(tt) > hi):
+                raise InputError(f"t: times outside the sampled span [{lo}, {hi}] s of the REBOUND orbit; "
+                                 "build the orbit with a larger t_end")
+        return super().evaluate(body, t, q)
+
+    def describe(self):
+        return {"kind": self.name, "orbit": self.orbit.describe()}

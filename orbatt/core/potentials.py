@@ -18,8 +18,12 @@ kind                code  params
 torque-free         0     (unused)
 heavy top (eq. 18)  1     ``[s Mg, xc1, xc2, xc3]``; ``U = s Mg (q x_c q~)_3``, ``s = +1``
                           physical (gravity along ``-s3``), ``s = -1`` the paper's printed sign
-gravity gradient,   2     ``[GM, a, e, inc, raan, argp, M0, n]`` (``orbatt.core.kepler``);
-Keplerian orbit           ``U = (3 GM / 2 r^3) x_B.(I x_B)``, eq. 20
+gravity gradient,   2     ``[GM, a, e, inc, raan, argp, M0, n, ...]``: ``GM`` then the
+Keplerian orbit           ``orb`` vector of ``orbatt.core.kepler`` (derived entries appended by
+                          ``orbit_vector``); ``U = (3 GM / 2 r^3) x_B.(I x_B)``, eq. 20
+gravity gradient,   3     ``[GM, t_first, t_last]``; ``table`` = the samples
+sampled orbit             ``[t, x, y, z, vx, vy, vz, ax, ay, az]`` of ``orbatt.core.sampled``
+                          (quintic Hermite in time; REBOUND orbits)
 ==================  ====  =====================================================================
 """
 from __future__ import annotations
@@ -28,11 +32,13 @@ import numba as nb
 import numpy as np
 
 from .kepler import kepler_radial
+from .sampled import sampled_radial
 from .qalg import qconj, qdot, qmul, qscale
 
 TORQUE_FREE = 0
 HEAVY_TOP = 1
 GRAVITY_GRADIENT_KEPLER = 2
+GRAVITY_GRADIENT_SAMPLED = 3
 
 EMPTY_TABLE = np.zeros((0, 0), dtype=np.float64)
 WORK_SIZE = 4
@@ -91,6 +97,9 @@ def potential(t, q, inertia, kind, params, table, work):
         return heavy_top(q, params)
     elif kind == GRAVITY_GRADIENT_KEPLER:
         r, xhat = kepler_radial(t, params[1:], work)
+        return gravity_gradient(q, inertia, params[0] / (r * r * r), xhat)
+    elif kind == GRAVITY_GRADIENT_SAMPLED:
+        r, xhat = sampled_radial(t, table, work)
         return gravity_gradient(q, inertia, params[0] / (r * r * r), xhat)
     raise ValueError("unknown potential kind")
 

@@ -1,0 +1,266 @@
+"""The Keplerian orbit provider: classical elements with units at the boundary, compiled
+Kepler solve (:mod:`orbatt.core.kepler`) inside."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import units as U
+from ..core import kepler as kk
+from ..core import potentials as kp
+from ..errors import InputError
+from .base import (R_EARTH, OrbitProvider, as_times, check_periapsis, elements_from_state, epoch_string,
+                   parse_epoch, resolve_gm)
+
+
+def _angle(value, name):
+    out = U.strip(value, U.ANGLE, name)
+    if out.shape != ():
+        raise InputError(f"{name}: expected one angle, got {value!r}")
+    return float(out)
+
+
+def _mean_from_true(f, e):
+    """Mean anomaly of the true anomaly ``f`` (same revolution)."""
+    E = 2.0 * math.atan2(math.sqrt(1.0 - e) * math.sin(0.5 * f), math.sqrt(1.0 + e) * math.cos(0.5 * f))
+    E += 2.0 * math.pi * round((f - E) / (2.0 * math.pi))
+    return _mean_from_eccentric(E, e)
+
+
+def _mean_from_eccentric(E, e):
+    return E - e * math.sin(E)
+
+
+class KeplerOrbit(OrbitProvider):
+    """An elliptic Keplerian orbit about a point mass (``DESIGN.md`` §1, §5).
+
+    Parameters
+    ----------
+    a : Quantity (length) or str
+        Semi-major axis, ``> 0``.
+    e : float or dimensionless Quantity
+        Eccentricity, ``0 <= e < 1``. Parabolic and hyperbolic orbits (``e >= 1``) are
+        refused with :class:`~orbatt.errors.InputError`.
+    i, raan, argp : Quantity (angle) or str, or float (radians)
+        Inclination (``0 <= i <= 180 deg``), right ascension of the ascending node and
+        argument of periapsis, all relative to the inertial frame ``S`` (its ``s1-s2``
+        plane is the reference plane, ``s1`` the reference direction).
+    true_anomaly, mean_anomaly, eccentric_anomaly : Quantity (angle), str or float (rad)
+        The anomaly at the epoch (``t = 0``): give at most one; default true anomaly 0.
+    gm : Quantity (km^3/s^2) or str, optional
+        The central body's ``G M``. Default: the Earth (astropy ``GM_earth``).
+    central_body : str, optional
+        Name recorded in :meth:`describe`: ``"earth"`` (default when ``gm`` is not given)
+        or any label (default ``"custom"`` with ``gm``).
+    epoch : astropy.time.Time or str, optional
+        The instant ``t = 0`` (a string is parsed as UTC).
+    body_radius : Quantity (length), optional
+        Radius of the central body for the periapsis check: a periapsis inside it
+        **warns** (:class:`~orbatt.orbits.PeriapsisWarning`), it is not refused (the
+        paper's Sect. 6.2 orbit has ``a (1 - e) = 5600 km``). Default: Earth's equatorial
+        radius for the Earth, no check for a custom ``gm``; ``None`` disables it.
+
+    Notes
+    -----
+    The mean anomaly is ``M(t) = M0 + n t``, ``n = sqrt(GM / a^3)``; Kepler's equation is
+    solved for arrays of times by the compiled solver (ulp-level residual for every
+    ``0 <= e < 1``, warm-started along the array). ``p(t)`` is the 3-1-3 Euler-parameter
+    quaternion of ``(raan, i, u = argp + f)``.
+
+    Examples
+    --------
+    The paper's Sect. 6.2 orbit:
+
+    >>> import astropy.units as u
+    >>> orbit = KeplerOrbit(7000 * u.km, 0.2, 30 * u.deg, 45 * u.deg, 15 * u.deg,
+    ...                     true_anomaly=0 * u.deg, body_radius=None)
+    >>> round(orbit.period, 1)
+    5828.5
+    """
+
+    name = "kepler"
+
+    def __init__(self, a, e, i, raan, argp, *, true_anomaly=None, mean_anomaly=None, eccentric_anomaly=None,
+                 gm=None, central_body=None, epoch=None, body_radius="default"):
+        av = U.strip(a, U.LENGTH, "a")
+        if av.shape != ():
+            raise InputError(f"a: expected one semi-major axis, got {a!r}")
+        av = float(av)
+        ev = U.strip(e, U.DIMENSIONLESS, "e")
+        if ev.shape != ():
+            raise InputError(f"e: expected one eccentricity, got {e!r}")
+        ev = float(ev)
+        if ev < 0.0:
+            raise InputError(f"e: {e!r} is negative; the eccentricity is 0 <= e < 1")
+        if ev >= 1.0:
+            raise InputError(f"e: {e!r} >= 1 (parabolic or hyperbolic orbit) is not supported; "
+                             "give an elliptic orbit, 0 <= e < 1")
+        if not av > 0.0:
+            raise InputError(f"a: {a!r} must be positive (semi-major axis of an elliptic orbit); "
+                             "give e.g. '7000 km'")
+        inc = _angle(i, "i")
+        if not 0.0 <= inc <= math.pi:
+            raise InputError(f"i: {i!r} is outside [0, 180] deg; give the inclination in that range "
+                             "(a retrograde orbit has i > 90 deg)")
+        self.gm, self.central_body = resolve_gm(gm, central_body)
+        given = [(k, v) for k, v in (("true_anomaly", true_anomaly), ("mean_anomaly", mean_anomaly),
+                                     ("eccentric_anomaly", eccentric_anomaly)) if v is not None]
+        if len(given) > 1:
+            raise InputError(f"{given[1][0]}: give only one of true_anomaly, mean_anomaly, eccentric_anomaly "
+                             f"(got {', '.join(k for k, _ in given)})")
+        kind, value = given[0] if given else ("true_anomaly", 0.0)
+        anom = _angle(value, kind)
+        if kind == "true_anomaly":
+            M0 = _mean_from_true(anom, ev)
+        elif kind == "eccentric_anomaly":
+            M0 = _mean_from_eccentric(anom, ev)
+        else:
+            M0 = anom
+        self.a = av
+        self.e = ev
+        self.inc = inc
+        self.raan = _angle(raan, "raan")
+        self.argp = _angle(argp, "argp")
+        self.M0 = M0
+        self.n = math.sqrt(self.gm / av**3)
+        self.period = 2.0 * math.pi / self.n
+        self.epoch = parse_epoch(epoch)
+        if isinstance(body_radius, str) and body_radius == "default":
+            self.body_radius = R_EARTH if self.central_body == "earth" else None
+        elif body_radius is None:
+            self.body_radius = None
+        else:
+            br = U.strip(body_radius, U.LENGTH, "body_radius")
+            if br.shape != () or not br > 0:
+                raise InputError(f"body_radius: {body_radius!r} must be one positive length, or None")
+            self.body_radius = float(br)
+        check_periapsis(av, ev, self.body_radius, self.central_body)
+        self._orb = kk.orbit_vector(av, ev, inc, self.raan, self.argp, M0, self.n)
+
+    # ---- alternative constructor ------------------------------------------------------
+    @classmethod
+    def from_state(cls, position, velocity, *, gm=None, central_body=None, epoch=None, body_radius="default"):
+        """The osculating Keplerian orbit of a state vector.
+
+        Parameters
+        ----------
+        position : Quantity (length), shape (3,)
+            Position relative to the central body in ``S`` components.
+        velocity : Quantity (speed), shape (3,)
+            Velocity in ``S`` components.
+        gm, central_body, epoch, body_radius
+            As for :class:`KeplerOrbit`.
+
+        Raises
+        ------
+        InputError
+            A hyperbolic or parabolic state (``e >= 1``, or non-positive ``a``), a
+            rectilinear one (``r x v = 0``), or malformed vectors.
+
+        Notes
+        -----
+        Singular element sets follow :func:`orbatt.orbits.base.elements_from_state`:
+        ``raan = 0`` for an equatorial orbit, ``argp = 0`` for a circular one; the state is
+        reproduced whatever the convention.
+        """
+        r = U.strip(position, U.LENGTH, "position")
+        v = U.strip(velocity, U.LENGTH / U.TIME, "velocity")
+        if r.shape != (3,) or v.shape != (3,):
+            raise InputError(f"position/velocity: expected 3 components each, got shapes {r.shape}, {v.shape}")
+        gmv, _ = resolve_gm(gm, central_body)
+        if np.linalg.norm(np.cross(r, v)) <= 1e-14 * np.linalg.norm(r) * max(np.linalg.norm(v), 1e-300):
+            raise InputError(f"position/velocity: {r.tolist()} km, {v.tolist()} km/s is a rectilinear "
+                             "(radial) motion with no orbit plane; give a state with angular momentum")
+        el = elements_from_state(r, v, gmv)
+        if not (el["a"] > 0 and el["e"] < 1.0):
+            raise InputError(f"position/velocity: the state has e = {float(el['e']):.6g} (specific energy >= 0): "
+                             "a parabolic or hyperbolic orbit is not supported; give an elliptic state")
+        return cls(float(el["a"]) * U.LENGTH, float(el["e"]), float(el["inc"]), float(el["raan"]),
+                   float(el["argp"]), true_anomaly=float(el["f"]), gm=gmv * U.GM if gm is not None else None,
+                   central_body=central_body, epoch=epoch, body_radius=body_radius)
+
+    # ---- evaluation -------------------------------------------------------------------
+    def _many(self, t):
+        t = as_times(t)
+        flat = np.ascontiguousarray(t.reshape(-1))
+        E, f, r, pos, vel = kk.kepler_many(flat, self._orb, self.gm)
+        return t.shape, E, f, r, pos, vel
+
+    def mean_anomaly(self, t):
+        """Mean anomaly ``M0 + n t`` (rad, not wrapped); shape ``t.shape``."""
+        t = as_times(t)
+        return self.M0 + self.n * t
+
+    def eccentric_anomaly(self, t):
+        """Eccentric anomaly (rad, on the revolution of the mean anomaly)."""
+        shape, E, *_ = self._many(t)
+        return E.reshape(shape)
+
+    def true_anomaly(self, t):
+        """True anomaly (rad, on the revolution of the mean anomaly: continuous in time)."""
+        shape, _, f, *_ = self._many(t)
+        return f.reshape(shape)
+
+    def radius(self, t):
+        """Orbit radius (km); shape ``t.shape``."""
+        shape, _, _, r, _, _ = self._many(t)
+        return r.reshape(shape)
+
+    def radial_direction(self, t):
+        """Unit radial vector in ``S``; shape ``t.shape + (3,)``."""
+        shape, _, _, r, pos, _ = self._many(t)
+        return (pos / r[:, None]).reshape(shape + (3,))
+
+    def state(self, t):
+        """``(position km, velocity km/s)`` in ``S``; each ``t.shape + (3,)``."""
+        shape, _, _, _, pos, vel = self._many(t)
+        return pos.reshape(shape + (3,)), vel.reshape(shape + (3,))
+
+    def orbital_quaternion(self, t):
+        """``p``: the 3-1-3 quaternion of ``(raan, i, u = argp + f)`` (maps ``O`` to ``S``);
+        continuous in time (``u`` is not wrapped); shape ``t.shape + (4,)``."""
+        f = self.true_anomaly(t)
+        uu = self.argp + f
+        ci = math.cos(0.5 * self.inc)
+        si = math.sin(0.5 * self.inc)
+        sp = 0.5 * (self.raan + uu)
+        sm = 0.5 * (self.raan - uu)
+        return np.stack([ci * np.cos(sp), si * np.cos(sm), si * np.sin(sm), ci * np.sin(sp)], axis=-1)
+
+    def orbital_rate(self, t):
+        """Angular velocity of ``O`` relative to ``S`` in ``O`` components (rad/s):
+        ``(0, 0, df/dt)`` with ``df/dt = h / r^2``."""
+        r = self.radius(t)
+        h = math.sqrt(self.gm * self.a * (1.0 - self.e) * (1.0 + self.e))
+        z = np.zeros_like(r)
+        return np.stack([z, z, h / r**2], axis=-1)
+
+    def acceleration(self, t):
+        """Point-mass acceleration ``-GM r / r^3`` in ``S`` (km/s^2)."""
+        pos, _ = self.state(t)
+        r = np.linalg.norm(pos, axis=-1)[..., None]
+        return -self.gm * pos / r**3
+
+    # ---- kernel and description -------------------------------------------------------
+    def kernel(self):
+        """``(GRAVITY_GRADIENT_KEPLER, [GM, *orb], EMPTY_TABLE)`` for the compiled potential."""
+        return kp.GRAVITY_GRADIENT_KEPLER, np.concatenate([[self.gm], self._orb]), kp.EMPTY_TABLE
+
+    @property
+    def elements(self):
+        """``dict`` of the elements at the epoch: ``a`` (km), ``e``, ``i``, ``raan``,
+        ``argp``, ``mean_anomaly``, ``true_anomaly`` (rad)."""
+        return {"a": self.a, "e": self.e, "i": self.inc, "raan": self.raan, "argp": self.argp,
+                "mean_anomaly": self.M0, "true_anomaly": float(self.true_anomaly(0.0))}
+
+    def describe(self):
+        """Plain description: ``type``, ``central_body``, ``gm_km3_s2``, ``a_km``, ``e``,
+        ``i_rad``, ``raan_rad``, ``argp_rad``, ``mean_anomaly_rad`` (at the epoch),
+        ``period_s``, and ``epoch`` (ISO UTC) when there is one."""
+        d = {"type": "kepler", "central_body": self.central_body, "gm_km3_s2": self.gm, "a_km": self.a,
+             "e": self.e, "i_rad": self.inc, "raan_rad": self.raan, "argp_rad": self.argp,
+             "mean_anomaly_rad": self.M0, "period_s": self.period}
+        if self.epoch is not None:
+            d["epoch"] = epoch_string(self.epoch)
+        return d
