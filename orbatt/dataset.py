@@ -14,7 +14,8 @@ variables; the names are in a label coordinate beside it):
 * ``axis`` - ``1 2 3``, labels ``x y z`` (``axis_label``): component along axis 1, 2, 3 of
   the frame the variable names (the paper's ``b_i`` or ``s_i``);
 * ``euler_313_angle`` - ``0 1 2``, labels ``phi theta psi``: the paper's 3-1-3 angles (eq. 12);
-* ``euler_321_angle`` - ``0 1 2``, labels ``roll pitch yaw``: 3-2-1 angles of ``q_orbital``
+* ``euler_321_angle`` - ``0 1 2``, labels ``roll pitch yaw``: angles of ``q_orbital`` about
+  the along-track, orbit-normal and radial axes (:func:`lvlh_angles`)
   (only with an orbit);
 * ``case`` - ``0 .. E-1``: ensemble member (only for ensembles; the first dimension).
 
@@ -32,7 +33,7 @@ Variables: ``q``, ``Q`` (the canonical state), ``omega``, ``g`` (body), ``G`` (s
 ``energy = kinetic_energy + potential_energy``, ``q_norm_error = |q| - 1``, ``qQ = q.Q``,
 ``euler_313``, ``inertia``; with an orbit also ``r``, ``p`` (``O`` relative to ``S``),
 ``true_anomaly``, ``position``, ``velocity`` (in ``S``), ``q_orbital = p~ q`` (``B`` relative to
-``O``) and ``euler_321`` (its roll, pitch, yaw; :func:`to_euler321`).
+``O``) and ``euler_321`` (its roll, pitch, yaw about ``o2, o3, o1``; :func:`lvlh_angles`).
 
 Units: dimensional problems use orbatt's internal system (kg, km, s, rad; :mod:`orbatt.units`),
 dimensionless ones ``"1"`` everywhere except angles (``"rad"``). Every ``units`` attribute is a
@@ -66,7 +67,7 @@ from . import quaternion as qt
 from .errors import InputError
 
 __all__ = [
-    "CF_UNITS", "QUATERNION_ORDER", "unit_string", "parse_unit", "to_euler321", "to_dataset",
+    "CF_UNITS", "QUATERNION_ORDER", "unit_string", "parse_unit", "to_euler321", "lvlh_angles", "to_dataset",
     "write_netcdf", "open_dataset", "NetCDFWriter", "OrbattAccessor",
 ]
 
@@ -232,6 +233,37 @@ def to_euler321(q):
     yaw_lock = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
     yaw = np.where(lock, yaw_lock, yaw_generic)
     return roll, pitch, yaw
+
+
+#: rotation of 120 deg about (1, 1, 1): relabels the axes (x, y, z) -> (y, z, x)
+_LVLH_RELABEL = np.array([0.5, 0.5, 0.5, 0.5])
+
+
+def lvlh_angles(q_orbital):
+    """Roll, pitch, yaw of an attitude relative to the orbital frame, as spacecraft practice
+    names them.
+
+    orbatt's orbital frame has ``o1`` radial (zenith), ``o2`` along-track, ``o3`` the orbit
+    normal (``DESIGN.md`` §1). **Roll** is the rotation about the along-track axis ``o2``,
+    **pitch** about the orbit normal ``o3`` (the in-plane libration of a gravity-gradient
+    satellite), **yaw** about the radial axis ``o1``, in the aerospace 3-2-1 sequence taken in
+    the relabelled axes ``(x', y', z') = (o2, o3, o1)``: first yaw about ``o1``, then pitch
+    about the new ``o3``, then roll about the new ``o2``. The body axes are relabelled the same
+    way, so body axes 1, 2, 3 along ``o1, o2, o3`` is zero roll, pitch and yaw. Positive
+    pitch turns about ``+o3`` (many LVLH conventions use ``-o3``: flip its sign to compare).
+
+    Parameters
+    ----------
+    q_orbital : array-like (..., 4)
+        Attitude of ``B`` relative to ``O`` (``x_O = q x_B q~``), scalar first.
+
+    Returns
+    -------
+    roll, pitch, yaw : ndarray (...)
+        rad; ranges and the singular ``pitch = +-pi/2`` as in :func:`to_euler321`.
+    """
+    m = _LVLH_RELABEL
+    return to_euler321(qt.mul(qt.mul(qt.conj(m), q_orbital), m))
 
 
 # --------------------------------------------------------------------------------------------
@@ -412,7 +444,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
         pos = _plain(pos, u.km)
         vel = _plain(vel, u.km / u.s)
         q_orb = qt.mul(qt.conj(p), q)
-        roll, pitch, yaw = to_euler321(q_orb)
+        roll, pitch, yaw = lvlh_angles(q_orb)
         coords["euler_321_angle"] = _var(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
         coords["euler_321_label"] = xr.Variable(("euler_321_angle",), np.array(EULER_321_LABELS),
                                                 {"long_name": "3-2-1 Euler angle name"})
@@ -426,8 +458,10 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
             "q_orbital": _var(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
                               **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
             "euler_321": _var(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
-                              "3-2-1 angles (roll, pitch, yaw) of q_orbital: "
-                              "q_orbital = q_z(yaw) q_y(pitch) q_x(roll)", frames="B relative to O"),
+                              "roll (about along-track o2), pitch (about orbit normal o3), yaw (about radial o1) "
+                              "of q_orbital: q_orbital = m q_yaw,o1 q_pitch,o3 q_roll,o2 m~ (3-2-1 sequence in "
+                              "the axes (o2, o3, o1))", frames="B relative to O",
+                              body_axes="body axes 2, 3, 1 nominally along o2, o3, o1"),
         })
 
     pot_desc = tr.potential.describe() if hasattr(tr.potential, "describe") else {"kind": type(tr.potential).__name__}
@@ -942,8 +976,9 @@ class OrbattAccessor:
 
     def plot_drift(self, case=None, fig=None):
         """Energy and constraint drift on log axes: ``|H - H0| / |H0|`` (or ``|H - H0|`` when
-        ``H0 = 0``), ``| |q| - 1 |`` and ``|q.Q|`` (exact zeros are not drawn). Returns the
-        Figure."""
+        ``H0 = 0``), ``| |q| - 1 |`` and the drift of ``q.Q`` from its initial value (the paper's
+        printed data start at -9.7e-8; exact zeros are not drawn). For a time-dependent
+        potential ``H`` is not an invariant. Returns the Figure."""
         import matplotlib.pyplot as plt
 
         ds = self._member(case)
@@ -956,7 +991,7 @@ class OrbattAccessor:
         rel = abs(H[0]) > 0
         series = [(dH / abs(H[0]) if rel else dH, "|H - H0| / |H0|" if rel else "|H - H0|"),
                   (np.abs(ds["q_norm_error"].values), "| |q| - 1 |"),
-                  (np.abs(ds["qQ"].values), "|q.Q|")]
+                  (np.abs(ds["qQ"].values - ds["qQ"].values[0]), "|q.Q - (q.Q)0|")]
         for ax, (y, title) in zip(axes, series):
             ax.semilogy(t, np.where(y > 0, y, np.nan))  # exact zeros left out of the log axis
             ax.set_title(title)

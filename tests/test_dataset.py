@@ -351,8 +351,9 @@ def test_orbit_variables(orbit_ds, orbit_traj):
     assert np.allclose(qt.rotate(p, [1.0, 0, 0]), r / np.linalg.norm(r, axis=1)[:, None], atol=1e-14)
     h = np.cross(r, v)
     assert np.allclose(qt.rotate(p, [0, 0, 1.0]), h / np.linalg.norm(h, axis=1)[:, None], atol=1e-14)
-    # roll/pitch/yaw are the scipy ZYX angles of q_orbital
-    ypr = qt.to_scipy(ds["q_orbital"].values).as_euler("ZYX")
+    # roll/pitch/yaw are the scipy ZYX angles of q_orbital in the relabelled axes (o2, o3, o1)
+    m = np.array([0.5, 0.5, 0.5, 0.5])
+    ypr = qt.to_scipy(qt.mul(qt.mul(qt.conj(m), ds["q_orbital"].values), m)).as_euler("ZYX")
     assert np.allclose(ds["euler_321"].values, ypr[:, ::-1], atol=1e-12)
     # potential energy from the kernel agrees with MacCullagh's formula on the stored r, p, q
     xb = qt.rotate_inv(q, qt.rotate(p, [1.0, 0, 0]))
@@ -639,3 +640,13 @@ def test_plots(free_ds, orbit_ds, tmp_path):
     assert len(fig3.axes) == 3
     fig3.savefig(tmp_path / "drift.png")
     plt.close("all")
+
+
+@pytest.mark.parametrize("axis,index", [((0, 1, 0), 0), ((0, 0, 1), 1), ((1, 0, 0), 2)])
+def test_lvlh_angles_name_the_orbital_axes(axis, index):
+    """Roll is about along-track o2, pitch about the orbit normal o3, yaw about radial o1."""
+    a = 0.3
+    angles = np.array(D.lvlh_angles(qt.from_axis_angle(axis, a)))
+    expected = np.zeros(3)
+    expected[index] = a
+    assert np.allclose(angles, expected, atol=1e-15)
