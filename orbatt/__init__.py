@@ -11,11 +11,13 @@ from .dataset import open_dataset, to_dataset
 from .errors import InputError, IntegrationError, OrbattError
 from .potentials import HeavyTop, Potential, TorqueFree
 from .propagate import propagate
+from .scenario import Scenario, load_scenario
 from .state import State
 from . import orbital
 from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to_orbital
 from .orbits import KeplerOrbit, ReboundOrbit
 from .potentials import GravityGradient
+from .sweep import Sweep, SweepError, load_sweep, run_sweep
 
 try:
     __version__ = _version("orbatt")
@@ -23,10 +25,11 @@ except PackageNotFoundError:  # pragma: no cover - source tree without install
     __version__ = "0+unknown"
 
 __all__ = [
-    "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate",
+    "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",
     "OrbattError", "InputError", "IntegrationError",
     "quaternion", "canonical", "euler", "__version__",
     "KeplerOrbit", "ReboundOrbit", "GravityGradient", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
     "to_dataset", "open_dataset", "write_aem", "read_aem",
+    "Sweep", "SweepError", "load_sweep", "run_sweep",
 ]

@@ -3,13 +3,16 @@
 Contract (other tools call these; keep the names)::
 
     orbatt run SCENARIO.toml [-o OUT.nc] [--plot DIR] [--method M] [--quiet]
+    orbatt sweep SCENARIO.toml [-o OUT.nc] [--scheduler ADDRESS] [--workers N] [--chunk-size N]
+                 [--resume] [--seed S] [--quiet]
     orbatt info OUT.nc
     orbatt plot OUT.nc -o DIR
     orbatt scenarios
     orbatt --version
 
 Bad input exits with code 2 and a one-line error on stderr naming the field, the value and
-the fix; ``--debug`` shows the traceback instead.
+the fix; a run that fails (e.g. a non-finite state mid-run) exits with 1 and a one-line error
+naming the time; ``--debug`` shows the traceback instead.
 """
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ import time
 from pathlib import Path
 
 EXIT_INPUT = 2
+EXIT_FAILURE = 1
 
 
 def _version():
@@ -40,6 +44,21 @@ def _parser():
     r.add_argument("--plot", metavar="DIR", help="also write PNG figures to DIR")
     r.add_argument("--method", help="override [integration] method")
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+
+    s = sub.add_parser("sweep", help="run a sweep scenario ([sweep] table) on Dask; one Dataset with a case dimension")
+    s.add_argument("scenario", help="scenario TOML file with a [sweep] table (or the name of a shipped one)")
+    s.add_argument("-o", "--output", help="output file: NetCDF, or Zarr if it ends with .zarr (default: NAME.nc in "
+                                          "the current folder); chunks go to OUTPUT.parts/ as they finish")
+    s.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler (tcp://host:port); "
+                                                          "default: a local cluster on 127.0.0.1; 'synchronous': no Dask")
+    s.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes (default: CPU count); "
+                                                            "with --scheduler: wait for N workers")
+    s.add_argument("--chunk-size", type=int, metavar="N", help="cases per task (default: [sweep] chunk_size, else "
+                                                               "about 4 tasks per worker); results do not depend on it")
+    s.add_argument("--resume", action="store_true", help="finish an interrupted sweep: compute only the chunks "
+                                                         "missing from OUTPUT.parts/")
+    s.add_argument("--seed", type=int, help="override [sweep] seed")
+    s.add_argument("--quiet", action="store_true", help="no progress or summary")
 
     i = sub.add_parser("info", help="summarize a result file")
     i.add_argument("file")
@@ -68,16 +87,84 @@ def _cmd_run(args):
         for f in write_plots(ds, args.plot, stem=sc.name):
             if not args.quiet:
                 print(f"figure: {f}")
-    if not ds.attrs.get("complete", 1):
+    if not int(ds.attrs.get("integration_complete", 1)):
         print("orbatt: run interrupted; the file holds what was computed", file=sys.stderr)
         return 130
     return 0
+
+
+def _cmd_sweep(args):
+    from .scenario import load_scenario
+    from .sweep import Sweep, run_sweep
+
+    sc = load_scenario(args.scenario)
+    sw = Sweep(sc, seed=args.seed)
+    out = Path(args.output) if args.output else Path(f"{sc.name}.nc")
+
+    def report(info):
+        if args.quiet:
+            return
+        rate = f", {info.cases_done / info.wall_time_s:.1f} cases/s" if info.wall_time_s > 0 else ""
+        print(f"\rorbatt sweep: {info.chunks_done}/{info.chunks_total} chunks, {info.cases_done}/{info.cases_total} "
+              f"cases, {info.wall_time_s:.1f} s{rate}   ", end="", file=sys.stderr, flush=True)
+
+    if not args.quiet and sw.seed_source == "default" and not args.resume:
+        print(f"orbatt sweep: [sweep] gives no seed; drew seed = {sw.seed} (recorded in the output as sweep_seed)",
+              file=sys.stderr)
+    try:
+        ds = run_sweep(sw, out, scheduler=args.scheduler, workers=args.workers, chunk_size=args.chunk_size,
+                       resume=args.resume, progress=report)
+    except KeyboardInterrupt:
+        print(f"\norbatt: interrupted; the finished chunks are in {out.name}.parts/: rerun with --resume to "
+              "compute only the missing ones", file=sys.stderr)
+        return 130
+    if not args.quiet:
+        import json
+
+        run = json.loads(ds.attrs["sweep_run"])
+        print(file=sys.stderr)
+        print(sweep_summary(ds, title=f"{sc.name} -> {out}", run=run))
+    ds.close()
+    return 0
+
+
+def sweep_summary(ds, title="", run=None) -> str:
+    """A short text summary of a sweep Dataset."""
+    import json
+
+    import numpy as np
+
+    lines = [title] if title else []
+    n = int(ds.attrs.get("sweep_cases", ds.sizes.get("case", 0)))
+    params = json.loads(ds.attrs.get("sweep_parameters", "{}"))
+    lines.append(f"  cases       {n} ({', '.join(params)}); seed {ds.attrs.get('sweep_seed')} "
+                 f"({ds.attrs.get('sweep_seed_source', '?')})")
+    if int(ds.attrs.get("sweep_resampled_cases", 0)):
+        lines.append(f"  resampled   {int(ds.attrs['sweep_resampled_cases'])} cases (outside physical limits)")
+    if run:
+        rate = run["cases_computed"] / run["wall_time_s"] if run["wall_time_s"] > 0 else float("nan")
+        lines.append(f"  run         {run['chunks_computed']} chunks computed, {run['chunks_reused']} reused, "
+                     f"{run['wall_time_s']:.1f} s on {run['scheduler']} ({run['workers']} workers), {rate:.1f} cases/s")
+    failed = int(np.asarray(ds["integration_failed"].values).sum())
+    if failed:
+        lines.append(f"  FAILED      {failed} cases stopped (integration_failed = 1, values NaN)")
+    if "max_pointing_error" in ds:
+        pe = np.degrees(np.asarray(ds["max_pointing_error"].values))
+        lines.append(f"  pointing    max error: median {np.nanmedian(pe):.3g} deg, max {np.nanmax(pe):.3g} deg")
+    if "tumbling" in ds:
+        lines.append(f"  tumbling    {int((np.asarray(ds['tumbling'].values) == 1).sum())} of {n} cases")
+    if "final_energy_error" in ds:
+        lines.append(f"  energy      max |relative error| {np.nanmax(np.abs(ds['final_energy_error'].values)):.3e}")
+    return "\n".join(lines)
 
 
 def _cmd_info(args):
     from .dataset import open_dataset
 
     ds = open_dataset(_existing(args.file))
+    if "sweep_format" in ds.attrs and "energy" not in ds:  # a sweep of reductions (orbatt sweep)
+        print(sweep_summary(ds, title=str(args.file)))
+        return 0
     print(summary(ds, title=str(args.file)))
     return 0
 
@@ -112,36 +199,30 @@ def _existing(path):
 
 def summary(ds, title="", wall=None) -> str:
     """A short text table: span, method, stats, invariant drift, energy error."""
-    import json
-
     import numpy as np
 
+    acc = ds.orbatt
     t = ds["time"].values
-    tu = ds["time"].attrs.get("units", "")
     lines = [title] if title else []
-    settings = ds.attrs.get("settings", "{}")
-    stats = ds.attrs.get("stats", "{}")
-    try:
-        settings = json.loads(settings) if isinstance(settings, str) else settings
-        stats = json.loads(stats) if isinstance(stats, str) else stats
-    except ValueError:
-        pass
-    lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {tu} ({t.size} outputs)")
-    lines.append(f"  method      {ds.attrs.get('method', '?')}  {settings}")
-    if stats:
-        lines.append("  stats       " + ", ".join(f"{k}={v}" for k, v in stats.items()))
+    lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {ds['time'].attrs.get('units', '')} ({t.size} outputs)"
+                 + (f", epoch {ds.attrs['epoch']}" if "epoch" in ds.attrs else ""))
+    lines.append(f"  method      {ds.attrs.get('method', '?')}  {acc.settings}")
+    if acc.stats:
+        lines.append("  stats       " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                                                for k, v in acc.stats.items()))
     E = ds["energy"].values
     dE = np.max(np.abs(E - E[..., :1]))
     rel = dE / max(np.max(np.abs(E)), np.finfo(float).tiny)
+    note = "  (not an invariant: the potential depends on time)" if "orbit" in ds.attrs else ""
     lines.append(f"  energy      max |E - E0| = {dE:.3e} {ds['energy'].attrs.get('units', '')} "
-                 f"(relative {rel:.3e})")
+                 f"(relative {rel:.3e}){note}")
     lines.append(f"  |q| - 1     max {np.max(np.abs(ds['q_norm_error'].values)):.3e}")
     qQ = ds["qQ"].values
     lines.append(f"  q.Q         max drift {np.max(np.abs(qQ - qQ[..., :1])):.3e} (initial {qQ.ravel()[0]:.3e})")
     if wall is not None:
-        lines.append(f"  wall time   {wall:.3f} s")
-    if not ds.attrs.get("complete", 1):
-        lines.append("  INCOMPLETE  the run was interrupted")
+        lines.append(f"  wall time   {wall:.3f} s (total, including setup and Dataset)")
+    if not int(ds.attrs.get("integration_complete", 1)):
+        lines.append("  INCOMPLETE  the run was interrupted; the data end at the last time reached")
     return "\n".join(lines)
 
 
@@ -165,16 +246,17 @@ def write_plots(ds, folder, stem="orbatt"):
 
 
 def main(argv=None) -> int:
-    from .errors import InputError
+    from .errors import InputError, OrbattError
 
     args = _parser().parse_args(argv)
     try:
-        return {"run": _cmd_run, "info": _cmd_info, "plot": _cmd_plot, "scenarios": _cmd_scenarios}[args.command](args)
-    except InputError as exc:
+        return {"run": _cmd_run, "sweep": _cmd_sweep, "info": _cmd_info, "plot": _cmd_plot,
+                "scenarios": _cmd_scenarios}[args.command](args)
+    except OrbattError as exc:
         if args.debug:
             raise
         print(f"orbatt: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        return EXIT_INPUT
+        return EXIT_INPUT if isinstance(exc, InputError) else EXIT_FAILURE
     except KeyboardInterrupt:
         print("orbatt: interrupted", file=sys.stderr)
         return 130

@@ -21,6 +21,8 @@ Schema (the contract other tools read; quantities are strings astropy parses, e.
                   epoch (ISO UTC); rebound: perturbations = ["j2", "moon", "sun"], integrator
     [integration] method, rtol, atol | step, t_end, output_step
                   (times: a time, a plain number if dimensionless, or "N orbits")
+    [sweep]       optional: parameters varied over many cases, run by ``orbatt sweep``
+                  (schema in :mod:`orbatt.sweep`); ``orbatt run`` runs the nominal case
 
 Outputs fall exactly on ``k * output_step`` for ``k = 0 .. floor(t_end / output_step)``.
 ``Q`` is in the unit implied by the inertia and time units (kg km^2 s^-1 for a dimensional
@@ -49,7 +51,7 @@ TABLES = {
     "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
               "mean_anomaly", "epoch", "perturbations", "integrator"},
     "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
-    "sweep": None,  # validated by orbatt.sweep when present
+    "sweep": None,  # keys checked by orbatt.sweep.parse_sweep_table (see parse)
 }
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
@@ -152,7 +154,7 @@ class Spec:
     frame: str = "inertial"
     orbit: dict | None = None
     integration: dict = field(default_factory=dict)
-    sweep: dict | None = None
+    sweep: object = None  # orbatt.sweep.SweepSpec of a [sweep] table, or None
 
 
 def parse(text: str, source: str = "<scenario>") -> Spec:
@@ -215,13 +217,19 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     initial = _parse_initial(ctx, init, dimless)
 
     integ = _parse_integration(ctx, data["integration"], dimless, orbit)
+    sweep = None
+    if "sweep" in data:  # the [sweep] schema lives with the sweeps (orbatt.sweep)
+        from .sweep import parse_sweep_table
+
+        sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
+                                  frame=frame)
     name = data.get("name", Path(source).stem)
     desc = data.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):
         raise ctx.error("name/description", "must be strings")
     return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
                 potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
-                integration=integ, sweep=data.get("sweep"))
+                integration=integ, sweep=sweep)
 
 
 def _parse_orbit(ctx, o):
@@ -338,3 +346,197 @@ def _parse_integration(ctx, g, dimless, orbit):
         if out[k][1] <= 0:
             raise ctx.error(f"[integration] {k}", f"{g[k]!r} must be positive")
     return out
+
+
+# ---- building and running ----------------------------------------------------------------
+class Scenario:
+    """A validated study: the body, potential, orbit, initial state and integration settings.
+
+    Build one with :func:`load_scenario`. :meth:`run` returns the result Dataset; calling it
+    again in the same process reuses everything built (the orbit, the compiled kernels).
+
+    Attributes
+    ----------
+    name, description : str
+    text : str
+        The scenario file's TOML text (stored in the Dataset's ``scenario`` attribute).
+    body : RigidBody
+    potential : Potential
+    orbit : OrbitProvider or None
+    state0 : State
+        Initial state in inertial components (converted from the orbital frame if the file
+        says ``frame = "orbital"``).
+    times : ndarray
+        Output times (s, or dimensionless): exactly ``k * output_step``.
+    method : str
+    settings : dict
+        ``rtol``, ``atol``, ``step`` as given (step in the time unit).
+    """
+
+    def __init__(self, spec: Spec, path=None):
+        from .potentials import HeavyTop, TorqueFree
+
+        self.spec = spec
+        self.path = path
+        self.name = spec.name
+        self.description = spec.description
+        self.text = spec.text
+        ctx = _Ctx(str(path) if path else spec.name)
+        dimless = spec.dimensionless
+        self.body = RigidBody(spec.inertia if dimless else spec.inertia * U.INERTIA)
+        self.orbit = None
+        self._kepler = None
+        if spec.orbit is not None:
+            self._kepler = _build_kepler(ctx, spec.orbit)
+        t_end = self._time(spec.integration["t_end"])
+        step_out = self._time(spec.integration["output_step"])
+        if step_out > t_end:
+            raise ctx.error("[integration] output_step", f"{step_out:g} is longer than t_end = {t_end:g}")
+        n = int(math.floor(t_end / step_out * (1 + 1e-12)))
+        self.times = np.arange(n + 1, dtype=np.float64) * step_out
+        self.t_end = t_end
+        if spec.orbit is not None:
+            self.orbit = (self._kepler if spec.orbit["provider"] == "kepler"
+                          else _build_rebound(ctx, spec.orbit, self._kepler, float(self.times[-1])))
+        if spec.potential_kind == "torque-free":
+            self.potential = TorqueFree()
+        elif spec.potential_kind == "heavy-top":
+            h = spec.heavy_top
+            if dimless:
+                self.potential = HeavyTop(h["mass_g"], h["center_of_mass"], sign=h["sign"])
+            else:
+                self.potential = HeavyTop(h["mass_g"] * U.MASS * U.LENGTH / U.TIME**2, h["center_of_mass"] * U.LENGTH,
+                                          sign=h["sign"])
+        else:
+            from .potentials import GravityGradient
+
+            self.potential = GravityGradient(self.orbit)
+        self.state0 = self._initial_state(ctx)
+        self.method = spec.integration["method"]
+        self.settings = {k: spec.integration[k] for k in ("rtol", "atol") if k in spec.integration}
+        if "step" in spec.integration:
+            self.settings["step"] = self._time(spec.integration["step"])
+
+    def _time(self, t):
+        kind, value = t
+        return value * self._kepler.period if kind == "orbits" else value
+
+    def _initial_state(self, ctx):
+        from .state import State
+
+        ini = self.spec.initial
+        body = self.body
+        try:
+            if "euler_momenta" in ini:
+                if self.spec.frame == "orbital":
+                    raise ctx.error("[initial] frame", "euler_momenta are inertial; use omega with frame = 'orbital'")
+                return State.from_euler(body, ini["euler_313"], ini["euler_momenta"])
+            if "q" in ini:
+                q = ini["q"]
+            else:
+                from . import quaternion as qt
+
+                q = qt.from_euler313(*ini["euler_313"])
+            if self.spec.frame == "orbital":
+                from .orbital import state_from_orbital
+
+                if "Q" in ini:
+                    raise ctx.error("[initial] Q", "Q is inertial; with frame = 'orbital' give omega (relative rates)")
+                return state_from_orbital(body, self.orbit, q, ini["omega"] * U.RATE)
+            if "Q" in ini:
+                return State(body, q, ini["Q"])
+            w = ini["omega"] if body.dimensionless else ini["omega"] * U.RATE
+            return State.from_omega(body, q, w)
+        except ScenarioError:
+            raise
+        except InputError as exc:
+            raise ctx.error("[initial]", str(exc)) from None
+
+    def run(self, method=None, progress=False, **overrides):
+        """Propagate and return the result :class:`xarray.Dataset` (see :mod:`orbatt.dataset`).
+
+        Parameters
+        ----------
+        method : str, optional
+            Override the file's ``[integration] method`` (its rtol/atol/step still apply
+            where the method takes them).
+        progress : bool or callable
+            Progress bar (True) or callback; off by default.
+        **overrides
+            Further keyword arguments for :func:`orbatt.propagate` (e.g. ``rtol``).
+        """
+        from .dataset import to_dataset
+        from .propagate import propagate
+
+        kw = dict(self.settings)
+        kw.update(overrides)
+        m = method or self.method
+        traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
+        epoch = self.orbit.epoch if self.orbit is not None else None
+        return to_dataset(traj, scenario_text=self.text, epoch=epoch, title=f"orbatt: {self.name}")
+
+    def __repr__(self):
+        return f"Scenario({self.name!r}, method={self.method!r}, outputs={self.times.size})"
+
+
+def _build_kepler(ctx, o):
+    from .orbits import KeplerOrbit
+
+    kw = {o["anomaly_kind"]: o["anomaly"] * U.ANGLE}
+    if o["central_body"] is None:
+        kw["gm"] = o["gm"] * U.GM
+    else:
+        kw["central_body"] = o["central_body"]
+    if o["epoch"] is not None:
+        kw["epoch"] = o["epoch"]
+    try:  # a periapsis inside the central body warns (PeriapsisWarning), as the paper's Sect. 6.2 orbit does
+        return KeplerOrbit(o["a"] * U.LENGTH, o["e"], o["i"] * U.ANGLE, o["raan"] * U.ANGLE,
+                           o["argp"] * U.ANGLE, **kw)
+    except InputError as exc:
+        raise ctx.error("[orbit]", str(exc)) from None
+
+
+def _build_rebound(ctx, o, kepler, t_end):
+    from .orbits import ReboundOrbit
+
+    try:
+        return ReboundOrbit(kepler, t_end * U.TIME, perturbations=o["perturbations"], integrator=o["integrator"])
+    except InputError as exc:
+        raise ctx.error("[orbit]", str(exc)) from None
+
+
+def shipped_scenarios():
+    """``[(name, description, path)]`` of the scenarios shipped with orbatt."""
+    from importlib.resources import files
+
+    out = []
+    for f in sorted(files("orbatt.scenarios").iterdir(), key=lambda p: p.name):
+        if f.name.endswith(".toml"):
+            spec = parse(f.read_text(), f.name)
+            out.append((spec.name, spec.description, f))
+    return out
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario file; return a :class:`Scenario`.
+
+    Parameters
+    ----------
+    path : str or Path
+        A TOML file, or the name of a shipped scenario (``orbatt scenarios`` lists them).
+
+    Raises
+    ------
+    ScenarioError
+        (an :class:`~orbatt.errors.InputError`) naming the file, the field, the value and
+        the fix.
+    """
+    p = Path(path)
+    if not p.is_file():
+        shipped = {name: f for name, _, f in shipped_scenarios()}
+        key = p.name[:-5] if p.name.endswith(".toml") else p.name
+        if key in shipped:
+            return Scenario(parse(shipped[key].read_text(), key), path=key)
+        raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
+                            f"{', '.join(sorted(shipped))}")
+    return Scenario(parse(p.read_text(), str(p)), path=p)

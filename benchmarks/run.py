@@ -1,0 +1,588 @@
+"""Work-precision benchmark of orbatt's integrators (issue 4).
+
+    python benchmarks/run.py            # a few minutes on 2 cores
+    python benchmarks/run.py --quick    # smaller ensembles, fewer repeats (~1 minute)
+
+Cases (DESIGN.md §9, the paper's Sect. 6):
+
+* **Keplerian**: gravity gradient on a Keplerian orbit (a = 7000 km, e = 0.2, i = pi/6,
+  raan = pi/4, argp = pi/12, f(t0) = 0), inertia (400, 500, 600) kg km^2, 10 orbits
+  (58 285 s). Reference: orbatt's DOP853 at rtol 3e-15 (cross-checked against the 6th-order
+  splitting at a small step and, when installed, heyoka at tol 1e-15).
+* **torque-free**: inertia (1.25, 1.0, 0.75), dimensionless, t = 100. Reference: the exact
+  solution (orbatt.analytic.torque_free).
+
+Both start from the paper's printed q(t0), Q(t0) (the 1e-7 radial part of Q removed).
+
+For each method and each target (final attitude error 1e-6 and 1e-9 rad) the loosest
+tolerance (adaptive methods; atol = rtol, the state components being of order 1: measured
+~12 % less work than atol = rtol / 100 at the same error) or the fewest steps (fixed-step methods)
+reaching it, and the median wall time over repeats of the whole call; ratios to baselines
+measured in the same run:
+
+(a) the classical model a user would write: Euler's equations + quaternion kinematics,
+    numpy right-hand side (Kepler's equation by a Python Newton loop), solve_ivp DOP853;
+(b) the same with the quaternion right-hand side (eq. 7) in numpy;
+(c) heyoka (Taylor method; ``pip install heyoka``), when installed;
+(d) Basilisk (``pip install bsk``), when installed: not automated here (see README.md).
+
+Then ensemble throughput: DOP853 body-orbits per second at <= 1e-9 rad after one orbit, and
+splitting body-steps per second, for N = 1e3 and 1e5 members.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import statistics
+import time
+
+import numpy as np
+
+import orbatt
+from orbatt import analytic
+from orbatt import quaternion as qt
+from orbatt.core import kepler
+from orbatt.core import potentials as kp
+
+try:  # optional baseline (c)
+    import heyoka as hy
+except Exception:  # pragma: no cover - optional
+    hy = None
+
+GM = 398600.4418
+A, ECC, INC, RAAN, ARGP = 7000.0, 0.2, math.pi / 6, math.pi / 4, math.pi / 12
+N_MEAN = math.sqrt(GM / A**3)
+PERIOD = 2 * math.pi / N_MEAN
+Q0 = np.array([0.5, -1 / math.sqrt(2), 0.0, 0.5])
+P0 = np.array([0.3, -0.848528, 0.141421, -1.5])
+P0 = P0 - (Q0 @ P0) * Q0
+TARGETS = (1e-6, 1e-9)
+
+
+class Spec:
+    """Kernel specification of a potential (what orbatt.GravityGradient(KeplerOrbit(...))
+    builds; written out here so the benchmark depends on the kernel contract only)."""
+
+    def __init__(self, kind, params):
+        self.kind, self.params, self.table = kind, np.asarray(params, dtype=float), np.zeros((0, 0))
+
+
+ORB = kepler.orbit_vector(A, ECC, INC, RAAN, ARGP, 0.0, N_MEAN)
+GG = Spec(kp.GRAVITY_GRADIENT_KEPLER, np.concatenate([[GM], ORB]))
+
+
+def angle(q, qref):
+    w = qt.mul(qt.conj(np.asarray(qref)), np.asarray(q))
+    return float(2 * np.arctan2(np.linalg.norm(w[..., 1:]), abs(w[..., 0])))
+
+
+def median_time(fn, repeats, budget_s=1.5):
+    """Median of wall times of ``fn()`` (at least one, at most ``repeats``, stopping once
+    ``budget_s`` is spent)."""
+    times = []
+    spent = 0.0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        dt = time.perf_counter() - t0
+        times.append(dt)
+        spent += dt
+        if spent > budget_s and len(times) >= 1:
+            break
+    return statistics.median(times), out
+
+
+# ---------------------------------------------------------------------------------------
+# The cases
+
+
+class Case:
+    def __init__(self, name, body, potential, T, qref, inertia, kind):
+        self.name, self.body, self.potential, self.T, self.qref = name, body, potential, T, qref
+        self.inertia, self.kind = inertia, kind
+        self.state = orbatt.State(body, Q0, P0)
+
+
+def kepler_case():
+    import astropy.units as u
+
+    body = orbatt.RigidBody([400, 500, 600] * u.kg * u.km**2)
+    T = 10 * PERIOD
+    s0 = orbatt.State(body, Q0, P0)
+    ref = orbatt.propagate(body, s0, GG, [0.0, T], rtol=3e-15, atol=1e-18).q[-1]
+    check = orbatt.propagate(body, s0, GG, [0.0, T], method="splitting6", step=T / 40000).q[-1]
+    case = Case("Keplerian gravity gradient, 10 orbits", body, GG, T, ref, body.inertia_value, 2)
+    case.ref_note = f"reference: dop853 rtol 3e-15; splitting6 with 40000 steps differs by {angle(check, ref):.1e} rad"
+    return case
+
+
+def free_case():
+    body = orbatt.RigidBody([1.25, 1.0, 0.75])
+    T = 100.0
+    qref, _ = analytic.torque_free(body.inertia_value, Q0, P0, np.array([T]))
+    case = Case("torque-free, t = 100", body, orbatt.TorqueFree(), T, qref[0], body.inertia_value, 0)
+    case.ref_note = "reference: exact solution (orbatt.analytic.torque_free)"
+    return case
+
+
+# ---------------------------------------------------------------------------------------
+# Baselines (a), (b): numpy right-hand sides in solve_ivp
+
+
+def _kepler_newton(M, e):
+    E = M if e < 0.8 else math.pi
+    for _ in range(50):
+        d = (E - e * math.sin(E) - M) / (1 - e * math.cos(E))
+        E -= d
+        if abs(d) < 1e-15:
+            break
+    return E
+
+
+def _radial(t):
+    """Orbit radius and radial unit vector (inertial), as a user would code it."""
+    E = _kepler_newton(N_MEAN * t, ECC)
+    r = A * (1 - ECC * math.cos(E))
+    f = 2 * math.atan2(math.sqrt(1 + ECC) * math.sin(E / 2), math.sqrt(1 - ECC) * math.cos(E / 2))
+    u = ARGP + f
+    cO, sO, ci, si, cu, su = math.cos(RAAN), math.sin(RAAN), math.cos(INC), math.sin(INC), math.cos(u), math.sin(u)
+    return r, np.array([cO * cu - sO * su * ci, sO * cu + cO * su * ci, su * si])
+
+
+def _qmul(a, b):
+    a0, a1, a2, a3 = a
+    b0, b1, b2, b3 = b
+    return np.array([a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                     a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0])
+
+
+def _conj(a):
+    return np.array([a[0], -a[1], -a[2], -a[3]])
+
+
+def classical_rhs(case):
+    I = case.inertia
+    gg = case.kind == 2
+
+    def f(t, x):
+        q = x[:4]
+        w = x[4:]
+        tau = np.zeros(3)
+        if gg:
+            r, xs = _radial(t)
+            xb = _qmul(_qmul(_conj(q), np.concatenate([[0.0], xs])), q)[1:]
+            tau = 3 * GM / r**3 * np.cross(xb, I * xb)
+        dw = (np.cross(I * w, w) + tau) / I
+        dq = 0.5 * _qmul(q, np.concatenate([[0.0], w]))
+        return np.concatenate([dq, dw])
+
+    x0 = np.concatenate([Q0, case.state.omega])
+    return f, x0
+
+
+def quaternion_rhs(case):
+    I = case.inertia
+    inv = np.concatenate([[0.0], 1 / I])
+    gg = case.kind == 2
+
+    def f(t, y):
+        q = y[:4]
+        Q = y[4:]
+        a = inv * _qmul(_conj(q), Q)
+        dq = 0.25 * _qmul(q, a)
+        dQ = 0.25 * _qmul(Q, a)
+        if gg:
+            r, xs = _radial(t)
+            X = np.concatenate([[0.0], xs])
+            xb = _qmul(_qmul(_conj(q), X), q)
+            Y = np.concatenate([[0.0], I * xb[1:]])
+            graw = -6 * GM / r**3 * _qmul(_qmul(X, q), Y)
+            n2 = q @ q
+            dQ = dQ - (graw - (q @ graw) / n2 * q) / n2**2
+        return np.concatenate([dq, dQ])
+
+    return f, np.concatenate([Q0, P0])
+
+
+def run_scipy_model(case, model, rtol):
+    from scipy.integrate import solve_ivp
+
+    f, x0 = model(case)
+    sol = solve_ivp(f, (0.0, case.T), x0, method="DOP853", rtol=rtol, atol=rtol)
+    return sol.y[:4, -1], sol.nfev
+
+
+# ---------------------------------------------------------------------------------------
+# Baseline (c): heyoka
+
+
+def heyoka_integrator(case, tol):
+    """Eq. (7) with the tangential gradient (and heyoka's kepE for the orbit)."""
+    qs = hy.make_vars("q0", "q1", "q2", "q3")
+    ps = hy.make_vars("p0", "p1", "p2", "p3")
+    I = case.inertia
+
+    def mul(a, b):
+        a0, a1, a2, a3 = a
+        b0, b1, b2, b3 = b
+        return [a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0]
+
+    def conj(a):
+        return [a[0], -a[1], -a[2], -a[3]]
+
+    w = mul(conj(qs), ps)
+    a = [0.0, w[1] / I[0], w[2] / I[1], w[3] / I[2]]
+    qd, pd = mul(qs, a), mul(ps, a)
+    grad = [0.0] * 4
+    if case.kind == 2:
+        E = hy.kepE(ECC, N_MEAN * hy.time)
+        cE, sE = hy.cos(E), hy.sin(E)
+        rr = 1.0 - ECC * cE
+        cf, sf = (cE - ECC) / rr, math.sqrt(1 - ECC**2) * sE / rr
+        P, Qv = ORB[7:10], ORB[10:13]
+        X = [0.0] + [cf * P[k] + sf * Qv[k] for k in range(3)]
+        k3 = GM / (A * rr) ** 3
+        xb = mul(mul(conj(qs), X), qs)
+        Y = [0.0, I[0] * xb[1], I[1] * xb[2], I[2] * xb[3]]
+        graw = [-6.0 * k3 * c for c in mul(mul(X, qs), Y)]
+        n2 = sum(c * c for c in qs)
+        cdot = sum(qs[i] * graw[i] for i in range(4)) / n2
+        grad = [(graw[i] - cdot * qs[i]) / (n2 * n2) for i in range(4)]
+    sys_ = [(qs[i], 0.25 * qd[i]) for i in range(4)] + [(ps[i], 0.25 * pd[i] - grad[i]) for i in range(4)]
+    return sys_, hy.taylor_adaptive(sys_, list(Q0) + list(P0), tol=tol)
+
+
+def run_heyoka(ta, case):
+    ta.time = 0.0
+    ta.state[:] = list(Q0) + list(P0)
+    ta.propagate_until(case.T)
+    return np.array(ta.state[:4])
+
+
+# ---------------------------------------------------------------------------------------
+# Searches
+
+
+RTOLS = [10.0 ** (-k / 4) for k in range(16, 57)]  # 1e-4 .. 1e-14, 4 per decade
+
+
+def search_tolerance(run, case, target, start=0):
+    """Loosest rtol of the grid with error <= target: ``run(rtol) -> (q, info)``."""
+    for i in range(start, len(RTOLS)):
+        q, info = run(RTOLS[i])
+        err = angle(q, case.qref)
+        if err <= target:
+            return i, RTOLS[i], err, info
+    return None, None, None, None
+
+
+def search_steps(run, case, target, order, n0):
+    """Fewest steps (to 3 %) with error <= target, from the error at ``n0`` and the order."""
+    q, _ = run(n0)
+    e0 = angle(q, case.qref)
+    n = n0 if e0 <= target else int(n0 * (e0 / target) ** (1.0 / order) * 1.02) + 1
+    for _ in range(12):
+        q, info = run(n)
+        err = angle(q, case.qref)
+        if err <= target:
+            # walk down while it still meets the target
+            while n > 16:
+                m = int(n / 1.03)
+                q2, info2 = run(m)
+                e2 = angle(q2, case.qref)
+                if e2 > target:
+                    break
+                n, err, info = m, e2, info2
+            return n, err, info
+        n = int(n * 1.15) + 1
+    return None, None, None
+
+
+# ---------------------------------------------------------------------------------------
+# Report
+
+
+def fmt_t(s):
+    if s is None:
+        return "-"
+    if s < 1e-3:
+        return f"{s * 1e6:.0f} us"
+    if s < 1:
+        return f"{s * 1e3:.2f} ms"
+    return f"{s:.2f} s"
+
+
+def work_precision(case, args, heyoka_available):
+    print(f"\n## {case.name}\n{case.ref_note}\n")
+    rows = []
+    repeats = args.repeats
+
+    def orbatt_adaptive(method):
+        def run(rtol):
+            tr = orbatt.propagate(case.body, case.state, case.potential, [0.0, case.T], method=method, rtol=rtol,
+                                  atol=rtol)
+            return tr.q[-1], tr
+        return run
+
+    def orbatt_fixed(method):
+        def run(n):
+            tr = orbatt.propagate(case.body, case.state, case.potential, [0.0, case.T], method=method,
+                                  step=case.T / n)
+            return tr.q[-1], tr
+        return run
+
+    fixed = [("rk4", 4, 2000), ("splitting2", 2, 20000), ("splitting4-yoshida", 4, 4000),
+             ("splitting4-suzuki", 4, 2000), ("splitting4", 4, 2000), ("splitting6-yoshida", 6, 1000),
+             ("splitting6", 6, 1000)]
+    for target in TARGETS:
+        # adaptive, compiled and scipy
+        for method in ("dop853", "scipy-DOP853"):
+            run = orbatt_adaptive(method)
+            i, rtol, err, tr = search_tolerance(run, case, target)
+            if rtol is None:
+                rows.append((target, method, "not reached", None, None, None, None))
+                continue
+            tm, tr = median_time(lambda: run(rtol)[1], repeats)
+            integ = tr.stats["wall_time_s"]
+            work = f"{tr.stats['steps']} st / {tr.stats['rhs_evaluations']} f"
+            rows.append((target, method, f"rtol=atol {rtol:.1e}", err, work, tm, integ))
+        for method, order, n0 in fixed:
+            if method == "splitting2" and target < 1e-7 and not args.full:
+                # ~2.5e7 steps (5 s per run): estimated from the 1e-6 row, not run
+                prev = [r for r in rows if r[1] == method and r[0] == 1e-6]
+                if prev and prev[0][3] is not None:
+                    n6 = int(prev[0][2].split()[0])
+                    n9 = int(n6 * (prev[0][3] / target) ** 0.5)
+                    rows.append((target, method, f"~{n9} steps (est.)", None, "not run (--full runs it)",
+                                 prev[0][5] * n9 / n6, None))
+                continue
+            run = orbatt_fixed(method)
+            n, err, tr = search_steps(run, case, target, order, n0)
+            if n is None:
+                rows.append((target, method, "not reached", None, None, None, None))
+                continue
+            tm, tr = median_time(lambda: run(n)[1], repeats)
+            ev = tr.stats.get("kicks", tr.stats.get("rhs_evaluations"))
+            rows.append((target, method, f"{n} steps", err, f"{ev} {'kicks' if 'kicks' in tr.stats else 'f'}", tm,
+                         tr.stats["wall_time_s"]))
+        # baselines (a), (b)
+        for label, model in (("(a) Euler+kinematics, numpy, solve_ivp", classical_rhs),
+                             ("(b) eq. 7, numpy, solve_ivp", quaternion_rhs)):
+            def run(rtol, model=model):
+                return run_scipy_model(case, model, rtol)
+            i, rtol, err, nfev = search_tolerance(run, case, target, start=8 if target < 1e-7 else 0)
+            if rtol is None:
+                rows.append((target, label, "not reached", None, None, None, None))
+                continue
+            tm, _ = median_time(lambda: run(rtol), min(repeats, 3), budget_s=3.0)
+            rows.append((target, label, f"rtol=atol {rtol:.1e}", err, f"{nfev} f", tm, None))
+        # (c) heyoka
+        if heyoka_available:
+            found = None
+            for tol in [10.0 ** (-k / 4) for k in range(20, 61)]:
+                _, ta = heyoka_integrator(case, tol)
+                q = run_heyoka(ta, case)
+                err = angle(q, case.qref)
+                if err <= target:
+                    found = (tol, ta, err)
+                    break
+            if found:
+                tol, ta, err = found
+                tm, _ = median_time(lambda: run_heyoka(ta, case), repeats)
+                rows.append((target, f"(c) heyoka {hy.__version__}", f"tol {tol:.1e}", err, f"order {ta.order}", tm,
+                             tm))
+            else:
+                rows.append((target, "(c) heyoka", "not reached", None, None, None, None))
+    # print
+    base = {}
+    for r in rows:
+        if r[1].startswith("(a)") or r[1].startswith("(b)") or r[1].startswith("(c)"):
+            base[(r[0], r[1][:3])] = r[5]
+    hdr = (f"{'target':>7}  {'method':<40} {'setting':<22} {'error':>8}  {'work':<26} {'time':>9} {'integr.':>9}"
+           f" {'vs (a)':>7} {'vs (b)':>7} {'vs (c)':>7}")
+    print(hdr)
+    print("-" * len(hdr))
+    for target, method, setting, err, work, tm, integ in rows:
+        ratios = []
+        for key in ("(a)", "(b)", "(c)"):
+            b = base.get((target, key))
+            ratios.append(f"{b / tm:7.1f}" if (b and tm) else f"{'-':>7}")
+        print(f"{target:7.0e}  {method:<40} {setting:<22} {('%.1e' % err) if err is not None else '-':>8}  "
+              f"{work or '-':<26} {fmt_t(tm):>9} {fmt_t(integ):>9} {' '.join(ratios)}")
+    return rows
+
+
+def ns_per_step(case, repeats):
+    """Cost of one step: Strang (1 gradient + 5 rotations) and the RHS via RK4 (4 RHS)."""
+    out = {}
+    n = 200_000
+    T = case.T
+    for method in ("splitting2", "splitting4", "splitting6", "rk4"):
+        tm, tr = median_time(lambda: orbatt.propagate(case.body, case.state, case.potential, [0.0, T],
+                                                      method=method, step=T / n), repeats)
+        out[method] = tr.stats["wall_time_s"] / n * 1e9
+    tm, tr = median_time(lambda: orbatt.propagate(case.body, case.state, case.potential, [0.0, T], rtol=1e-11,
+                                                  atol=1e-13), repeats)
+    out["dop853 per RHS"] = tr.stats["wall_time_s"] / tr.stats["rhs_evaluations"] * 1e9
+    return out
+
+
+def ensemble_states(body, n, seed=1):
+    """The paper's case perturbed: random attitude (uniform), body momentum = the paper's
+    g(t0) + 10 % isotropic noise."""
+    rng = np.random.default_rng(seed)
+    q = qt.normalize(rng.normal(size=(n, 4)))
+    g0 = 0.5 * qt.vector(qt.mul(qt.conj(Q0), P0))
+    g = g0 + 0.1 * np.linalg.norm(g0) * rng.normal(size=(n, 3))
+    return q, g
+
+
+def ensembles(case, sizes, repeats):
+    print("\n## Ensembles (Keplerian case, one orbit)\n")
+    import numba
+
+    body = case.body
+    T = PERIOD
+    # settings for <= 1e-9 rad after one orbit, checked on a sample of 24 members
+    qs, gs = ensemble_states(body, 24, seed=99)
+    sample = orbatt.State.from_momentum(body, qs, gs)
+    ref = orbatt.propagate(body, sample, GG, [0.0, T], rtol=3e-15, atol=1e-18).q[:, -1]
+
+    def sample_error(**kw):
+        tr = orbatt.propagate(body, sample, GG, [0.0, T], **kw)
+        return max(angle(tr.q[e, -1], ref[e]) for e in range(24))
+
+    settings = {}
+    for method in ("dop853", "dop853-lanes"):
+        for rtol in RTOLS:
+            err = sample_error(method=method, rtol=rtol, atol=rtol)
+            if err <= 1e-9:
+                settings[method] = ({"rtol": rtol, "atol": rtol}, f"rtol = atol {rtol:.1e}", err)
+                break
+    for n in (100, 120, 150, 180, 220, 270, 330, 400, 500, 600, 800, 1000):
+        err = sample_error(method="splitting6", step=T / n)
+        if err <= 1e-9:
+            settings["splitting6"] = ({"step": T / n}, f"{n} steps/orbit", err)
+            break
+    n2 = 2000
+    settings["splitting2"] = ({"step": T / n2}, f"{n2} steps/orbit", sample_error(method="splitting2", step=T / n2))
+    print("members: the paper's state with a uniformly random attitude and the body momentum perturbed by 10 % "
+          f"(isotropic); numba threads: {numba.get_num_threads()}")
+    for method, (kw, label, err) in settings.items():
+        print(f"  {method:<13} {label:<20} max error on 24 sampled members {err:.1e} rad")
+    print(f"\n{'N':>7}  {'method':<13} {'time':>9} {'body-orbits/s':>14} {'body-steps/s':>13} {'steps/member':>13}")
+    results = []
+    for N in sizes:
+        q, g = ensemble_states(body, N)
+        states = orbatt.State.from_momentum(body, q, g)
+        for method, (kw, label, err) in settings.items():
+            small = orbatt.State.from_momentum(body, q[:64], g[:64])
+            orbatt.propagate(body, small, GG, [0.0, T], method=method, **kw)  # compile / warm up
+            tm, tr = median_time(lambda: orbatt.propagate(body, states, GG, [0.0, T], method=method, **kw),
+                                 repeats if N <= 10_000 else 1, budget_s=3.0)
+            wall = tr.stats["wall_time_s"]
+            bo = f"{N / wall:14.0f}" if err <= 1e-9 else f"{'(%.0e rad)' % err:>14}"
+            print(f"{N:7d}  {method:<13} {fmt_t(wall):>9} {bo} {tr.stats['steps'] / wall:13.3g} "
+                  f"{tr.stats['steps'] / N:13.1f}")
+            results.append((N, method, wall, N / wall, tr.stats["steps"] / wall))
+    # one thread, for a per-core comparison (heyoka's batch mode below runs on one thread)
+    N = sizes[0]
+    q, g = ensemble_states(body, N)
+    states = orbatt.State.from_momentum(body, q, g)
+    nthreads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        for method in ("dop853", "dop853-lanes", "splitting2"):
+            kw, label, err = settings[method]
+            tm, tr = median_time(lambda: orbatt.propagate(body, states, GG, [0.0, T], method=method, **kw), repeats,
+                                 budget_s=3.0)
+            wall = tr.stats["wall_time_s"]
+            bo = f"{N / wall:14.0f}" if err <= 1e-9 else f"{'(%.0e rad)' % err:>14}"
+            print(f"{N:7d}  {method:<13} {fmt_t(wall):>9} {bo} {tr.stats['steps'] / wall:13.3g} "
+                  f"{tr.stats['steps'] / N:13.1f}   (1 thread)")
+    finally:
+        numba.set_num_threads(nthreads)
+    return results
+
+
+def heyoka_ensemble(case, sizes, repeats):
+    """heyoka's batch mode (SIMD lanes) over the same ensemble, threads over batches."""
+    body = case.body
+    T = PERIOD
+    qs, gs = ensemble_states(body, 24, seed=99)
+    sample = orbatt.State.from_momentum(body, qs, gs)
+    ref = orbatt.propagate(body, sample, GG, [0.0, T], rtol=3e-15, atol=1e-18).q[:, -1]
+    sys_, _ = heyoka_integrator(case, 1e-9)
+    bs = hy.recommended_simd_size()
+    for tol in [10.0 ** (-k / 2) for k in range(12, 30)]:
+        ta = hy.taylor_adaptive(sys_, list(Q0) + list(P0), tol=tol)
+        errs = []
+        for e in range(24):
+            ta.time = 0.0
+            ta.state[:] = list(qs[e]) + list(sample.Q[e])
+            ta.propagate_until(T)
+            errs.append(angle(np.array(ta.state[:4]), ref[e]))
+        if max(errs) <= 1e-9:
+            break
+    print(f"\nheyoka {hy.__version__} batch mode (SIMD width {bs}), tol {tol:.1e}: max error {max(errs):.1e} rad")
+    for N in sizes:
+        q, g = ensemble_states(body, N)
+        st = orbatt.State.from_momentum(body, q, g)
+        y0 = np.concatenate([st.q, st.Q], axis=1)
+        nb = N // bs
+        tab = hy.taylor_adaptive_batch(sys_, np.ascontiguousarray(y0[:bs].T), tol=tol)
+        # one batch integrator reused in a Python loop (heyoka's ensemble_propagate_until_batch
+        # copies the integrator for every batch and measured 10x slower here): one thread
+        t0 = time.perf_counter()
+        for i in range(nb):
+            tab.set_time(0.0)
+            tab.state[:] = y0[i * bs:(i + 1) * bs].T
+            tab.propagate_until(T)
+        wall = time.perf_counter() - t0
+        print(f"{N:7d}  {'heyoka batch':<13} {fmt_t(wall):>9} {nb * bs / wall:14.0f}   (1 thread; x2 for 2 cores)")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="N = 1e3 and 1e4 ensembles, fewer repeats")
+    ap.add_argument("--full", action="store_true", help="also run Strang at 1e-9 (~2.5e7 steps)")
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--no-ensembles", action="store_true")
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.repeats = 3
+    import numba
+
+    print("# orbatt integrator benchmark")
+    print(f"orbatt {orbatt.__version__}, numpy {np.__version__}, numba {numba.__version__}, python "
+          f"{platform.python_version()}, {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
+          f"numba threads {numba.get_num_threads()}")
+    print("time: median wall time of the whole call (orbatt.propagate / solve_ivp / heyoka propagate_until); "
+          "integr.: orbatt's compiled loop alone (stats['wall_time_s'])")
+    if hy is None:
+        print("(c) heyoka: not installed - skipped (pip install heyoka)")
+    print("(d) Basilisk: not run by this script (see benchmarks/README.md for the measured reference numbers)")
+    t_start = time.time()
+    # warm up the compiled kernels (first call compiles or loads the cache)
+    free = free_case()
+    for m, kw in (("dop853", {}), ("splitting2", {"step": 1.0}), ("rk4", {"step": 1.0})):
+        orbatt.propagate(free.body, free.state, free.potential, [0.0, 1.0], method=m, **kw)
+    kep = kepler_case()
+    for case in (kep, free):
+        work_precision(case, args, hy is not None)
+    print("\n## Cost per step, Keplerian case (ns)")
+    for k, v in ns_per_step(kep, args.repeats).items():
+        print(f"  {k:<16} {v:7.0f} ns")
+    if not args.no_ensembles:
+        sizes = (1000, 10_000) if args.quick else (1000, 100_000)
+        ensembles(kep, sizes, args.repeats)
+        if hy is not None:
+            heyoka_ensemble(kep, sizes, args.repeats)
+    print(f"\ntotal benchmark time {time.time() - t_start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
