@@ -509,8 +509,12 @@ def shipped_scenarios():
     """``[(name, description, path)]`` of the scenarios shipped with orbatt."""
     from importlib.resources import files
 
+    try:
+        folder = files("orbatt.scenarios")
+    except ModuleNotFoundError:  # a source checkout used without installing: scenarios/ beside orbatt/
+        folder = Path(__file__).resolve().parent.parent / "scenarios"
     out = []
-    for f in sorted(files("orbatt.scenarios").iterdir(), key=lambda p: p.name):
+    for f in sorted(folder.iterdir(), key=lambda p: p.name):
         if f.name.endswith(".toml"):
             spec = parse(f.read_text(), f.name)
             out.append((spec.name, spec.description, f))

@@ -2,6 +2,7 @@
 import re
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -18,9 +19,10 @@ SHORT = {  # t_end for a short CI run of each shipped scenario
 }
 
 
-def cli(*args, cwd=None):
+def cli(*args):
+    # run outside the checkout, so that the installed package (not ./orbatt) is what runs
     return subprocess.run([sys.executable, "-m", "orbatt.cli", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd, timeout=600)
+                          cwd=tempfile.gettempdir(), timeout=600)
 
 
 def shorten(src: Path, dst_dir: Path) -> Path:
