@@ -204,7 +204,9 @@ def summary(ds, title="", wall=None) -> str:
     acc = ds.orbatt
     t = ds["time"].values
     lines = [title] if title else []
-    lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {ds['time'].attrs.get('units', '')} ({t.size} outputs)"
+    tu = ds["time"].attrs.get("units", "")
+    tu = "(dimensionless)" if tu == "1" else tu
+    lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {tu} ({t.size} outputs)"
                  + (f", epoch {ds.attrs['epoch']}" if "epoch" in ds.attrs else ""))
     lines.append(f"  method      {ds.attrs.get('method', '?')}  {acc.settings}")
     if acc.stats:
@@ -214,7 +216,8 @@ def summary(ds, title="", wall=None) -> str:
     dE = np.max(np.abs(E - E[..., :1]))
     rel = dE / max(np.max(np.abs(E)), np.finfo(float).tiny)
     note = "  (not an invariant: the potential depends on time)" if "orbit" in ds.attrs else ""
-    lines.append(f"  energy      max |E - E0| = {dE:.3e} {ds['energy'].attrs.get('units', '')} "
+    eu = ds["energy"].attrs.get("units", "")
+    lines.append(f"  energy      max |E - E0| = {dE:.3e} {'' if eu == '1' else eu} "
                  f"(relative {rel:.3e}){note}")
     lines.append(f"  |q| - 1     max {np.max(np.abs(ds['q_norm_error'].values)):.3e}")
     qQ = ds["qQ"].values
