@@ -749,13 +749,16 @@ def _positive(value, name, body=None, *, unit=None, allow_zero=False):
 
 def _progress_printer(stream=None):
     stream = stream or sys.stderr
-    state = {"last": 0.0}
+    state = {"last": 0.0, "shown": False}
 
     def report(info: ProgressInfo):
         now = info.wall_time_s
+        if not state["shown"] and now < 1.0:
+            return  # runs shorter than a second show no bar
         if now - state["last"] < 0.2 and info.fraction < 1.0:
             return
         state["last"] = now
+        state["shown"] = True
         width = 30
         fill = int(round(width * info.fraction))
         stream.write(f"\rorbatt: [{'#' * fill}{'.' * (width - fill)}] {100 * info.fraction:5.1f}%  "
