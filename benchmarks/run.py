@@ -24,7 +24,9 @@ measured in the same run:
     numpy right-hand side (Kepler's equation by a Python Newton loop), solve_ivp DOP853;
 (b) the same with the quaternion right-hand side (eq. 7) in numpy;
 (c) heyoka (Taylor method; ``pip install heyoka``), when installed;
-(d) Basilisk (``pip install bsk``), when installed: not automated here (see README.md).
+(d) Basilisk (``pip install bsk``), when installed (Keplerian case): spacecraft hub, point-mass
+    Earth, GravityGradientEffector, RKF78 and RK4 at the largest task step reaching the target
+    (plus the issue's settings RKF78 30 s, 10 s and RK4 1 s); time = ExecuteSimulation alone.
 
 Then ensemble throughput: DOP853 body-orbits per second at <= 1e-9 rad after one orbit, and
 splitting body-steps per second, for N = 1e3 and 1e5 members.
@@ -50,6 +52,20 @@ try:  # optional baseline (c)
     import heyoka as hy
 except Exception:  # pragma: no cover - optional
     hy = None
+
+try:  # optional baseline (d); its import time is reported
+    _t_import = time.perf_counter()
+    from Basilisk import __version__ as BSK_VERSION
+    from Basilisk.simulation import GravityGradientEffector as bsk_gg
+    from Basilisk.simulation import spacecraft as bsk_spacecraft
+    from Basilisk.simulation import svIntegrators as bsk_integrators
+    from Basilisk.utilities import RigidBodyKinematics as bsk_rbk
+    from Basilisk.utilities import SimulationBaseClass as bsk_sim
+    from Basilisk.utilities import orbitalMotion as bsk_orbit
+    from Basilisk.utilities import simIncludeGravBody as bsk_grav
+    BSK_IMPORT_S = time.perf_counter() - _t_import
+except Exception as _exc:  # pragma: no cover - optional
+    BSK_VERSION, BSK_IMPORT_S, BSK_ERROR = None, None, f"{type(_exc).__name__}: {_exc}"
 
 GM = 398600.4418
 A, ECC, INC, RAAN, ARGP = 7000.0, 0.2, math.pi / 6, math.pi / 4, math.pi / 12
@@ -263,6 +279,148 @@ def run_heyoka(ta, case):
 
 
 # ---------------------------------------------------------------------------------------
+# Baseline (d): Basilisk
+
+
+def basilisk_sim(case, integrator, n, tol=None):
+    """The Keplerian case as a Basilisk simulation (SI units), ``n`` task steps over ``case.T``
+    (adaptive integrators: relTol = tol, absTol = tol / 100 when ``tol`` is given; with
+    Basilisk's defaults, relTol 1e-4 and absTol 1e-8, RKF78 takes one step per task step here).
+
+    Spacecraft hub with the body's inertia (kg m^2; principal axes = body axes, centre of mass
+    at B), point-mass Earth (mu = GM, no spherical harmonics), GravityGradientEffector with the
+    Earth as planet, the orbit from the same elements (Basilisk integrates it numerically with
+    the same integrator; orbatt uses Kepler's equation). Attitude: sigma_BN = MRP of q0 (orbatt's
+    q maps body to inertial components, i.e. it is Basilisk's beta_BN), omega_BN_B = g / I.
+    The task period is an integer number of ns: the run ends at t_end = n * dt_ns, within
+    n/2 ns of case.T; the error is measured against the reference at t_end.
+    Returns (sim, spacecraft, t_end)."""
+    T_ns = round(case.T * 1e9)
+    dt_ns = round(T_ns / n)
+    sim = bsk_sim.SimBaseClass()
+    proc = sim.CreateNewProcess("dyn")
+    proc.addTask(sim.CreateNewTask("dynTask", dt_ns))
+    sc = bsk_spacecraft.Spacecraft()
+    sc.ModelTag = "orbatt-kepler"
+    sc.hub.mHub = 1000.0  # irrelevant: no force depends on it
+    sc.hub.r_BcB_B = [[0.0], [0.0], [0.0]]
+    sc.hub.IHubPntBc_B = np.diag(np.asarray(case.inertia) * 1e6).tolist()  # kg km^2 -> kg m^2
+    grav = bsk_grav.gravBodyFactory()
+    earth = grav.createEarth()
+    earth.isCentralBody = True
+    earth.mu = GM * 1e9  # km^3/s^2 -> m^3/s^2: the benchmark's GM exactly
+    grav.addBodiesTo(sc)
+    oe = bsk_orbit.ClassicElements()
+    oe.a, oe.e, oe.i, oe.Omega, oe.omega, oe.f = A * 1e3, ECC, INC, RAAN, ARGP, 0.0
+    r0, v0 = bsk_orbit.elem2rv(GM * 1e9, oe)
+    sc.hub.r_CN_NInit = np.reshape(r0, (3, 1)).tolist()
+    sc.hub.v_CN_NInit = np.reshape(v0, (3, 1)).tolist()
+    sc.hub.sigma_BNInit = np.reshape(bsk_rbk.EP2MRP(Q0 / np.linalg.norm(Q0)), (3, 1)).tolist()
+    sc.hub.omega_BN_BInit = np.reshape(case.state.omega, (3, 1)).tolist()  # rad/s
+    gg = bsk_gg.GravityGradientEffector()
+    gg.ModelTag = "gravityGradient"
+    gg.addPlanetName(earth.planetName)
+    sc.addDynamicEffector(gg)
+    integ = getattr(bsk_integrators, integrator)(sc)
+    if tol is not None:
+        integ.relTol, integ.absTol = tol, tol / 100
+    sc.setIntegrator(integ)
+    sim.AddModelToTask("dynTask", sc)
+    sim.AddModelToTask("dynTask", gg)
+    sim.InitializeSimulation()
+    sim.ConfigureStopTime(n * dt_ns)
+    return sim, sc, n * dt_ns * 1e-9
+
+
+_BSK_REFS = {}
+
+
+def basilisk_reference(case, t_end):
+    """The benchmark's tight reference (dop853 rtol 3e-15), at Basilisk's final time."""
+    if t_end not in _BSK_REFS:
+        _BSK_REFS[t_end] = orbatt.propagate(case.body, case.state, case.potential, [0.0, t_end], rtol=3e-15,
+                                            atol=1e-18).q[-1]
+    return _BSK_REFS[t_end]
+
+
+def run_basilisk(case, integrator, n, tol=None):
+    """One Basilisk run: (final attitude quaternion (scalar first), info dict)."""
+    t0 = time.perf_counter()
+    sim, sc, t_end = basilisk_sim(case, integrator, n, tol)
+    t1 = time.perf_counter()
+    sim.ExecuteSimulation()
+    t2 = time.perf_counter()
+    st = sc.scStateOutMsg.read()
+    q = np.asarray(bsk_rbk.MRP2EP(st.sigma_BN), dtype=float)
+    r_kep, x_kep = _radial(t_end)
+    dr = float(np.linalg.norm(np.asarray(st.r_BN_N) / 1e3 - r_kep * x_kep))  # km
+    return q, {"t_end": t_end, "setup_s": t1 - t0, "exec_s": t2 - t1, "dr_km": dr}
+
+
+def basilisk_error(case):
+    def error(q, info):
+        return float(qt.angle_between(q, basilisk_reference(case, info["t_end"])))
+    return error
+
+
+def basilisk_rows(case, target, repeats):
+    """Rows (d) for one target: RKF78 and RK4 at the largest task step reaching it (step
+    search as for orbatt's fixed-step methods), RKF78 adaptive (600 s task steps) at the
+    loosest tolerance reaching it, plus, at 1e-9, the issue's settings."""
+    label = f"(d) Basilisk {BSK_VERSION}"
+    error = basilisk_error(case)
+    rows, setups = [], []
+
+    def timed(run, n):
+        """Median of ExecuteSimulation alone over fresh simulations (setup reported apart)."""
+        execs = []
+        for _ in range(max(1, min(repeats, 5))):
+            q, info = run(n)
+            execs.append(info["exec_s"])
+            setups.append(info["setup_s"])
+            if sum(execs) > 2.0:
+                break
+        return statistics.median(execs), q, info
+
+    # adaptive RKF78: tolerance search, task step 600 s
+    n600 = round(case.T / 600)
+    tols = [10.0 ** (-k / 4) for k in range(24 if target > 1e-7 else 40, 65)]  # from 1e-6 / 1e-10 to 1e-16
+    for tol in tols:
+        q, info = run_basilisk(case, "svIntegratorRKF78", n600, tol)
+        if error(q, info) <= target:
+            break
+    else:
+        tol = None
+    if tol is None:
+        rows.append((target, f"{label} RKF78 adaptive", "not reached", None, None, None, None))
+    else:
+        tm, q, info = timed(lambda n: run_basilisk(case, "svIntegratorRKF78", n, tol), n600)
+        rows.append((target, f"{label} RKF78 adaptive", f"relTol {tol:.1e}, 600 s", error(q, info),
+                     f"dr {info['dr_km']:.0e} km", tm, None))
+    runs = [("RKF78", "svIntegratorRKF78", None, 8, max(1, round(case.T / 120))),
+            ("RK4", "svIntegratorRK4", None, 4, max(1, round(case.T / 8)))]
+    if target < 1e-7:
+        runs += [("RKF78", "svIntegratorRKF78", 30.0, None, None), ("RKF78", "svIntegratorRKF78", 10.0, None, None),
+                 ("RK4", "svIntegratorRK4", 1.0, None, None)]
+    for name, integ, dt, order, n0 in runs:
+        def run(n, integ=integ):
+            return run_basilisk(case, integ, n)
+        if dt is None:
+            n, err, info = search_steps(run, case, target, order, n0, error=error)
+            if n is None:
+                rows.append((target, f"{label} {name}", "not reached", None, None, None, None))
+                continue
+            method = f"{label} {name}"
+        else:
+            n = round(case.T / dt)
+            method = f"{label} {name} {dt:.0f} s (issue)"
+        tm, q, info = timed(run, n)
+        rows.append((target, method, f"dt {case.T / n:.1f} s", error(q, info), f"{n} st, dr {info['dr_km']:.0e} km",
+                     tm, None))
+    return rows, statistics.median(setups) if setups else None
+
+
+# ---------------------------------------------------------------------------------------
 # Searches
 
 
@@ -279,20 +437,24 @@ def search_tolerance(run, case, target, start=0):
     return None, None, None, None
 
 
-def search_steps(run, case, target, order, n0):
-    """Fewest steps (to 3 %) with error <= target, from the error at ``n0`` and the order."""
-    q, _ = run(n0)
-    e0 = angle(q, case.qref)
+def search_steps(run, case, target, order, n0, error=None):
+    """Fewest steps (to 3 %) with error <= target, from the error at ``n0`` and the order.
+    ``error(q, info)``: the final attitude error (default: the angle to ``case.qref``)."""
+    if error is None:
+        def error(q, info):
+            return angle(q, case.qref)
+    q, info = run(n0)
+    e0 = error(q, info)
     n = n0 if e0 <= target else int(n0 * (e0 / target) ** (1.0 / order) * 1.02) + 1
     for _ in range(12):
         q, info = run(n)
-        err = angle(q, case.qref)
+        err = error(q, info)
         if err <= target:
             # walk down while it still meets the target
             while n > 16:
                 m = int(n / 1.03)
                 q2, info2 = run(m)
-                e2 = angle(q2, case.qref)
+                e2 = error(q2, info2)
                 if e2 > target:
                     break
                 n, err, info = m, e2, info2
@@ -396,22 +558,44 @@ def work_precision(case, args, heyoka_available):
                              tm))
             else:
                 rows.append((target, "(c) heyoka", "not reached", None, None, None, None))
+        # (d) Basilisk (the Keplerian case only)
+        if case.kind == 2 and BSK_VERSION is not None:
+            brows, bsk_setup = basilisk_rows(case, target, repeats)
+            rows += brows
     # print
     base = {}
     for r in rows:
         if r[1].startswith("(a)") or r[1].startswith("(b)") or r[1].startswith("(c)"):
             base[(r[0], r[1][:3])] = r[5]
+        elif r[1].startswith("(d)") and r[3] is not None and r[3] <= r[0] and r[5]:
+            # Basilisk's best (fastest row reaching the target)
+            key = (r[0], "(d)")
+            base[key] = min(base.get(key, math.inf), r[5])
     hdr = (f"{'target':>7}  {'method':<40} {'setting':<22} {'error':>8}  {'work':<26} {'time':>9} {'integr.':>9}"
-           f" {'vs (a)':>7} {'vs (b)':>7} {'vs (c)':>7}")
+           f" {'vs (a)':>7} {'vs (b)':>7} {'vs (c)':>7} {'vs (d)':>7}")
     print(hdr)
     print("-" * len(hdr))
     for target, method, setting, err, work, tm, integ in rows:
         ratios = []
-        for key in ("(a)", "(b)", "(c)"):
+        for key in ("(a)", "(b)", "(c)", "(d)"):
             b = base.get((target, key))
             ratios.append(f"{b / tm:7.1f}" if (b and tm) else f"{'-':>7}")
         print(f"{target:7.0e}  {method:<40} {setting:<22} {('%.1e' % err) if err is not None else '-':>8}  "
               f"{work or '-':<26} {fmt_t(tm):>9} {fmt_t(integ):>9} {' '.join(ratios)}")
+    if case.kind == 2 and BSK_VERSION is not None:
+        print(f"(d) Basilisk {BSK_VERSION}: time = ExecuteSimulation alone (median over fresh simulations); import "
+              f"{BSK_IMPORT_S:.2f} s (once), setup (build + InitializeSimulation) {fmt_t(bsk_setup)} per run, not "
+              "included; dr = Basilisk's numerically integrated orbit position minus Kepler's at the final time; "
+              "error against the reference at Basilisk's final time n * dt (integer ns, within 3e-5 s of T)")
+        for target in TARGETS:
+            best = base.get((target, "(d)"))
+            dop = [r for r in rows if r[0] == target and r[1] == "dop853" and r[5]]
+            if best and dop:
+                bname = min((r for r in rows if r[0] == target and r[1].startswith("(d)") and r[5] == best),
+                            key=lambda r: r[5])
+                print(f"dop853 vs Basilisk's best at {target:.0e} rad ({bname[1][4:]}, {bname[2]}, "
+                      f"{fmt_t(best)}): {best / dop[0][5]:.0f}x (whole call {fmt_t(dop[0][5])}), "
+                      f"{best / dop[0][6]:.0f}x (compiled loop {fmt_t(dop[0][6])})")
     return rows
 
 
@@ -564,7 +748,8 @@ def main(argv=None):
           "integr.: orbatt's compiled loop alone (stats['wall_time_s'])")
     if hy is None:
         print("(c) heyoka: not installed - skipped (pip install heyoka)")
-    print("(d) Basilisk: not run by this script (see benchmarks/README.md for the measured reference numbers)")
+    if BSK_VERSION is None:
+        print(f"(d) Basilisk: not importable - skipped (pip install bsk; {BSK_ERROR})")
     t_start = time.time()
     # warm up the compiled kernels (first call compiles or loads the cache)
     free = free_case()
