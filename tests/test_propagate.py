@@ -454,11 +454,22 @@ def test_progress_callback_and_stop(sat):
     np.testing.assert_array_equal(tr.t, t[:len(tr.t)])
 
 
-def test_progress_bar_prints(free, capsys):
+def test_progress_bar_prints_only_for_runs_over_a_second(free, capsys):
+    import io
+
+    from orbatt.propagate import ProgressInfo, _progress_printer
+
     body, s0 = free
     orbatt.propagate(body, s0, orbatt.TorqueFree(), [0.0, 5.0], progress=True)
-    err = capsys.readouterr().err
-    assert "orbatt:" in err and "100.0%" in err
+    assert capsys.readouterr().err == ""  # a short run: no bar
+    out = io.StringIO()
+    report = _progress_printer(out)
+    report(ProgressInfo(0.3, 3.0, 10.0, 100, 0.5))
+    assert out.getvalue() == ""
+    report(ProgressInfo(0.6, 6.0, 10.0, 200, 1.2))
+    report(ProgressInfo(1.0, 10.0, 10.0, 300, 1.3))
+    text = out.getvalue()
+    assert "orbatt:" in text and " 60.0%" in text and "100.0%" in text and text.endswith("\n")
 
 
 @pytest.mark.parametrize("method,kw", [("dop853", {"rtol": 1e-12}), ("splitting2", {"step": 0.5})])
