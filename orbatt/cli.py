@@ -252,6 +252,13 @@ def main(argv=None) -> int:
     from .errors import InputError, OrbattError
 
     args = _parser().parse_args(argv)
+    if not args.debug:
+        import warnings
+
+        def one_line(message, category, filename, lineno, file=None, line=None):
+            print(f"orbatt: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+        warnings.showwarning = one_line
     try:
         return {"run": _cmd_run, "sweep": _cmd_sweep, "info": _cmd_info, "plot": _cmd_plot,
                 "scenarios": _cmd_scenarios}[args.command](args)

@@ -471,7 +471,10 @@ class Scenario:
         kw = dict(self.settings)
         kw.update(overrides)
         m = method or self.method
-        traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
+        try:
+            traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
+        except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
+            raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
         epoch = self.orbit.epoch if self.orbit is not None else None
         return to_dataset(traj, scenario_text=self.text, epoch=epoch, title=f"orbatt: {self.name}")
 
