@@ -173,3 +173,18 @@ def test_orbital_frame_initial_state_is_aligned():
     assert np.allclose(sc.state0.omega, w_O, rtol=1e-13, atol=1e-20)
     n = 2 * np.pi / sc.orbit.period
     assert abs(w_O[2] / n - 1) < 3e-3 and abs(w_O[0]) < 1e-3 * n and w_O[1] == 0
+
+
+def test_fixed_step_override_without_step_names_the_table(tmp_path):
+    path = shorten(SCEN / "paper-torque-free.toml", tmp_path)
+    r = cli("run", path, "-o", tmp_path / "s.nc", "--method", "splitting4")
+    assert r.returncode == 2
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "[integration]" in lines[0] and "step" in lines[0]
+
+
+def test_warnings_are_one_line(tmp_path):
+    path = shorten(SCEN / "paper-keplerian.toml", tmp_path)
+    r = cli("run", path, "-o", tmp_path / "k.nc", "--quiet")
+    assert r.returncode == 0
+    assert r.stderr.strip().startswith("orbatt: warning: periapsis") and len(r.stderr.strip().splitlines()) == 1
