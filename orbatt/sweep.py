@@ -953,8 +953,6 @@ def _compute_chunk(sc, spec, job, units):
         iu = sc.body.inertia_unit
         all_bodies = [RigidBody(inertia[e].tolist() if dimless else inertia[e] * iu) for e in range(n)]
     outs = set(spec.outputs)
-    N = sc.times.size
-    q_all = np.empty((n, N, 4)) if "trajectory" in outs else None
     qi, Qi, qf, Qf = (np.empty((n, 4)) for _ in range(4))
     failed = np.zeros(n, dtype=bool)
     perr = np.full(n, np.nan)

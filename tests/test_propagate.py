@@ -327,7 +327,6 @@ def test_ensemble_scipy_reference(free):
 
 
 def _bad_cases(body, s0):
-    free = orbatt.TorqueFree()
     return [
         (dict(t=[0, 1], method="rk5"), "method: 'rk5' is not a known method"),
         (dict(t=[0, 1], method="splitting4"), "step: method 'splitting4' has a fixed step"),

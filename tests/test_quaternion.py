@@ -1,7 +1,7 @@
 """Quaternion algebra: identities by property tests, conversions by round trips."""
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.spatial.transform import Rotation

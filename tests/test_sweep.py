@@ -16,7 +16,7 @@ import xarray as xr
 
 import orbatt
 from orbatt.scenario import Scenario, ScenarioError, parse
-from orbatt.sweep import PARAMETERS, Sweep, load_sweep, run_sweep
+from orbatt.sweep import PARAMETERS, Sweep, run_sweep
 
 SCEN = Path(__file__).resolve().parent.parent / "scenarios"
 pytestmark = pytest.mark.filterwarnings("ignore::orbatt.orbits.base.PeriapsisWarning")
