@@ -116,10 +116,10 @@ _CF_TIME_UNITS = {"seconds": u.s, "second": u.s, "secs": u.s, "sec": u.s, "s": u
                   "h": u.h, "days": u.day, "day": u.day, "d": u.day}
 
 # internal unit system (orbatt.units) by quantity kind, and its dimensionless counterpart
-_DIMENSIONAL = {"time": "s", "angle": "rad", "rate": "rad s-1", "inertia": "kg km2",
+DIMENSIONAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s-1", "inertia": "kg km2",
                 "momentum": "kg km2 s-1", "energy": "kg km2 s-2", "length": "km",
                 "speed": "km s-1", "one": "1"}
-_DIMENSIONLESS = {k: ("rad" if k == "angle" else "1") for k in _DIMENSIONAL}
+DIMENSIONLESS_UNITS = {k: ("rad" if k == "angle" else "1") for k in DIMENSIONAL_UNITS}
 
 DEFAULT_CHUNK_TIME = 16384
 _LABEL_COORDS = ("quat_label", "axis_label", "euler_313_label", "euler_321_label")
@@ -269,7 +269,7 @@ def lvlh_angles(q_orbital):
 # --------------------------------------------------------------------------------------------
 # building
 # --------------------------------------------------------------------------------------------
-def _json(obj) -> str:
+def to_json(obj) -> str:
     def default(x):
         if isinstance(x, np.generic):
             return x.item()
@@ -291,11 +291,11 @@ def _plain(x, unit):
     return np.asarray(x, dtype=np.float64)
 
 
-def _utc_now() -> str:
+def utc_now() -> str:
     return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def _epoch_string(epoch) -> str | None:
+def iso_epoch(epoch) -> str | None:
     """ISO 8601 UTC string (``...T..:..:..fffffffffZ``, ns digits) of an epoch, or None."""
     if epoch is None:
         return None
@@ -317,13 +317,13 @@ def _epoch_string(epoch) -> str | None:
     return t.isot + "Z"
 
 
-def _version() -> str:
+def orbatt_version() -> str:
     from . import __version__
 
     return __version__
 
 
-def _var(dims, data, units, long_name, **extra):
+def cf_variable(dims, data, units, long_name, **extra):
     attrs = {"units": units, "long_name": long_name}
     attrs.update(extra)
     return xr.Variable(dims, data, attrs)
@@ -358,7 +358,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     tr = trajectory
     body = tr.body
     dimless = bool(body.dimensionless)
-    U = _DIMENSIONLESS if dimless else _DIMENSIONAL
+    U = DIMENSIONLESS_UNITS if dimless else DIMENSIONAL_UNITS
     t = np.ascontiguousarray(tr.t, dtype=np.float64)
     q = np.asarray(tr.q, dtype=np.float64)
     Q = np.asarray(tr.Q, dtype=np.float64)
@@ -377,7 +377,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     orbit = tr.orbit
     if epoch is None and orbit is not None and not dimless:
         epoch = getattr(orbit, "epoch", None)
-    epoch_s = None if dimless else _epoch_string(epoch)
+    epoch_s = None if dimless else iso_epoch(epoch)
 
     # --- state and derived quantities (orbatt.canonical / quaternion / potential) ---
     g = cn.body_momentum(q, Q)
@@ -401,38 +401,38 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
         time_attrs.update(standard_name="time", axis="T")
     coords = {
         "time": xr.Variable(("time",), t, time_attrs),
-        "quat": _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
+        "quat": cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
         "quat_label": xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
-        "axis": _var(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
+        "axis": cf_variable(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
         "axis_label": xr.Variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
-        "euler_313_angle": _var(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
+        "euler_313_angle": cf_variable(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
         "euler_313_label": xr.Variable(("euler_313_angle",), np.array(EULER_313_LABELS),
                                        {"long_name": "3-1-3 Euler angle name"}),
     }
     if ens:
-        coords["case"] = _var(("case",), np.arange(q.shape[0]), "1", "ensemble member")
+        coords["case"] = cf_variable(("case",), np.arange(q.shape[0]), "1", "ensemble member")
 
     qv = tdims + ("quat",)
     vv = tdims + ("axis",)
     data = {
-        "q": _var(qv, q, "1", "attitude quaternion of the body",
+        "q": cf_variable(qv, q, "1", "attitude quaternion of the body",
                   **_quat_attrs("B relative to S", "x_S = q x_B q~ (maps body to space components)")),
-        "Q": _var(qv, Q, U["momentum"], "conjugate momentum of q (paper eq. 5: Q = 2 q g)",
+        "Q": cf_variable(qv, Q, U["momentum"], "conjugate momentum of q (paper eq. 5: Q = 2 q g)",
                   quaternion_order=QUATERNION_ORDER, conjugate_to="q (B relative to S)",
                   convention="g = 1/2 Im(q~ Q) (body), G = 1/2 Im(Q q~) (space)"),
-        "omega": _var(vv, omega, U["rate"], "angular velocity of the body (body components)", frame="B"),
-        "g": _var(vv, g, U["momentum"], "angular momentum (body components)", frame="B"),
-        "G": _var(vv, G, U["momentum"], "angular momentum (space components)", frame="S"),
-        "energy": _var(tdims, T + Upot, U["energy"], "total energy H = T + U"),
-        "kinetic_energy": _var(tdims, T, U["energy"], "kinetic energy T (paper eq. 6)"),
-        "potential_energy": _var(tdims, Upot, U["energy"], "potential energy U"),
-        "q_norm_error": _var(tdims, norm_err, "1", "constraint residual |q| - 1"),
-        "qQ": _var(tdims, qQ, U["momentum"], "constraint residual q.Q (R4 dot product)"),
-        "euler_313": _var(tdims + ("euler_313_angle",), e313, "rad",
+        "omega": cf_variable(vv, omega, U["rate"], "angular velocity of the body (body components)", frame="B"),
+        "g": cf_variable(vv, g, U["momentum"], "angular momentum (body components)", frame="B"),
+        "G": cf_variable(vv, G, U["momentum"], "angular momentum (space components)", frame="S"),
+        "energy": cf_variable(tdims, T + Upot, U["energy"], "total energy H = T + U"),
+        "kinetic_energy": cf_variable(tdims, T, U["energy"], "kinetic energy T (paper eq. 6)"),
+        "potential_energy": cf_variable(tdims, Upot, U["energy"], "potential energy U"),
+        "q_norm_error": cf_variable(tdims, norm_err, "1", "constraint residual |q| - 1"),
+        "qQ": cf_variable(tdims, qQ, U["momentum"], "constraint residual q.Q (R4 dot product)"),
+        "euler_313": cf_variable(tdims + ("euler_313_angle",), e313, "rad",
                           "3-1-3 Euler angles (phi, theta, psi) of q (paper eq. 12): "
                           "q = q_z(phi) q_x(theta) q_z(psi)", frames="B relative to S"),
-        "inertia": _var(lead + ("axis",), inertia, U["inertia"], "principal moments of inertia (I1, I2, I3)",
+        "inertia": cf_variable(lead + ("axis",), inertia, U["inertia"], "principal moments of inertia (I1, I2, I3)",
                         frame="B"),
     }
 
@@ -445,19 +445,19 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
         vel = _plain(vel, u.km / u.s)
         q_orb = qt.mul(qt.conj(p), q)
         roll, pitch, yaw = lvlh_angles(q_orb)
-        coords["euler_321_angle"] = _var(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
+        coords["euler_321_angle"] = cf_variable(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
         coords["euler_321_label"] = xr.Variable(("euler_321_angle",), np.array(EULER_321_LABELS),
                                                 {"long_name": "3-2-1 Euler angle name"})
         data.update({
-            "r": _var(("time",), r, "km", "orbit radius"),
-            "p": _var(("time", "quat"), p, "1", "orbital quaternion",
+            "r": cf_variable(("time",), r, "km", "orbit radius"),
+            "p": cf_variable(("time", "quat"), p, "1", "orbital quaternion",
                       **_quat_attrs("O relative to S", "x_S = p x_O p~ (maps orbital to space components)")),
-            "true_anomaly": _var(("time",), nu, "rad", "true anomaly"),
-            "position": _var(("time", "axis"), pos, "km", "position of the body's centre of mass", frame="S"),
-            "velocity": _var(("time", "axis"), vel, "km s-1", "velocity of the body's centre of mass", frame="S"),
-            "q_orbital": _var(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
+            "true_anomaly": cf_variable(("time",), nu, "rad", "true anomaly"),
+            "position": cf_variable(("time", "axis"), pos, "km", "position of the body's centre of mass", frame="S"),
+            "velocity": cf_variable(("time", "axis"), vel, "km s-1", "velocity of the body's centre of mass", frame="S"),
+            "q_orbital": cf_variable(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
                               **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
-            "euler_321": _var(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
+            "euler_321": cf_variable(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
                               "roll (about along-track o2), pitch (about orbit normal o3), yaw (about radial o1) "
                               "of q_orbital: q_orbital = m q_yaw,o1 q_pitch,o3 q_roll,o2 m~ (3-2-1 sequence in "
                               "the axes (o2, o3, o1))", frames="B relative to O",
@@ -468,27 +468,27 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     attrs = {
         "Conventions": CONVENTIONS,
         "title": title or f"orbatt attitude propagation ({pot_desc.get('kind', 'unknown potential')})",
-        "source": f"orbatt {_version()}",
+        "source": f"orbatt {orbatt_version()}",
         "references": REFERENCE,
-        "orbatt_version": _version(),
+        "orbatt_version": orbatt_version(),
         "method": str(tr.method),
-        "method_settings": _json(tr.settings),
-        "integration_stats": _json(tr.stats),
+        "method_settings": to_json(tr.settings),
+        "integration_stats": to_json(tr.stats),
         "integration_complete": np.int8(1 if tr.complete else 0),
-        "potential": _json(pot_desc),
+        "potential": to_json(pot_desc),
         "unit_system": "dimensionless (angles in rad)" if dimless else "kg km s rad",
         "frames": FRAMES,
         "quaternion_order": QUATERNION_ORDER,
     }
     if orbit is not None:
-        attrs["orbit"] = _json(orbit.describe() if hasattr(orbit, "describe") else {"kind": type(orbit).__name__})
+        attrs["orbit"] = to_json(orbit.describe() if hasattr(orbit, "describe") else {"kind": type(orbit).__name__})
     if epoch_s:
         attrs["epoch"] = epoch_s
     if scenario_text is not None:
         attrs["scenario"] = str(scenario_text)
-    now = _utc_now()
+    now = utc_now()
     attrs["date_created"] = now
-    attrs["history"] = f"{now} orbatt {_version()}: propagated with {tr.method}"
+    attrs["history"] = f"{now} orbatt {orbatt_version()}: propagated with {tr.method}"
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
@@ -526,7 +526,7 @@ def _default_engine():
                          "pip install 'orbatt[io]'") from None
 
 
-def _check_engine(engine):
+def check_engine(engine):
     engine = _default_engine() if engine is None else str(engine).lower()
     if engine not in ("netcdf4", "h5netcdf"):
         raise InputError(f"engine: {engine!r} is not 'netcdf4' or 'h5netcdf' (orbatt files are "
@@ -534,7 +534,7 @@ def _check_engine(engine):
     return engine
 
 
-def _encode(ds: xr.Dataset) -> xr.Dataset:
+def encode(ds: xr.Dataset) -> xr.Dataset:
     """The file form: CF time reference where there is an epoch, no stale encodings."""
     out = ds.drop_encoding()
     epoch = ds.attrs.get("epoch")
@@ -546,8 +546,8 @@ def _encode(ds: xr.Dataset) -> xr.Dataset:
     return out
 
 
-def _decode(ds: xr.Dataset) -> xr.Dataset:
-    """Inverse of :func:`_encode` on a dataset opened with ``decode_times=False``."""
+def decode(ds: xr.Dataset) -> xr.Dataset:
+    """Inverse of :func:`encode` on a dataset opened with ``decode_times=False``."""
     if "time" in ds.coords:
         units = str(ds["time"].attrs.get("units", ""))
         if " since " in units:
@@ -568,7 +568,7 @@ def _decode(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def _encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
+def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
     enc = {}
     for name, var in ds.variables.items():
         e = {}
@@ -614,18 +614,18 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
     ``time`` is an unlimited dimension. Values are stored as float64 without fill values:
     reading gives them back bit for bit.
     """
-    engine = _check_engine(engine)
+    engine = check_engine(engine)
     path = os.fspath(path)
     if append and os.path.exists(path):
         _append(ds, path, engine)
         return
-    enc_ds = _encode(ds)
+    enc_ds = encode(ds)
     enc_ds.to_netcdf(path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
-                     encoding=_encoding(enc_ds, complevel, chunk_time))
+                     encoding=encoding(enc_ds, complevel, chunk_time))
 
 
 def _append(ds: xr.Dataset, path, engine):
-    piece = _encode(ds)
+    piece = encode(ds)
     t_new = piece["time"].values
     if engine == "netcdf4":
         import netCDF4
@@ -686,10 +686,10 @@ def _append(ds: xr.Dataset, path, engine):
         comp = get("integration_complete")
         if comp is not None:
             put("integration_complete", np.int8(int(np.asarray(comp)) and int(ds.attrs.get("integration_complete", 1))))
-        now = _utc_now()
+        now = utc_now()
         put("date_modified", now)
         hist = get("history") or ""
-        put("history", f"{hist}\n{now} orbatt {_version()}: appended {n} samples".lstrip("\n"))
+        put("history", f"{hist}\n{now} orbatt {orbatt_version()}: appended {n} samples".lstrip("\n"))
     finally:
         f.close()
 
@@ -734,7 +734,7 @@ class NetCDFWriter:
 
     def __init__(self, path, *, engine=None, complevel=1, chunk_time=DEFAULT_CHUNK_TIME):
         self.path = os.fspath(path)
-        self.engine = _check_engine(engine)
+        self.engine = check_engine(engine)
         self.complevel = complevel
         self.chunk_time = chunk_time
         self._started = False
@@ -789,11 +789,11 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
         of the file is undone), label coordinates as strings, every value bit for bit as
         written.
     """
-    engine = _check_engine(engine)
+    engine = check_engine(engine)
     kwargs.setdefault("decode_times", False)
     kwargs.setdefault("decode_timedelta", False)
     ds = xr.open_dataset(os.fspath(path), engine=engine, **kwargs)
-    ds = _decode(ds)
+    ds = decode(ds)
     return ds.load() if load else ds
 
 

@@ -64,14 +64,14 @@ class ScenarioError(InputError):
 
 
 @dataclass
-class _Ctx:
+class FieldContext:
     source: str
 
     def error(self, where, msg):
         return ScenarioError(f"{self.source}: {where}: {msg}")
 
 
-def _quantity(ctx, where, value, unit, *, dimensionless):
+def parse_quantity(ctx, where, value, unit, *, dimensionless):
     """Parse one scalar: a Quantity string, or a plain number when ``dimensionless`` (or when
     ``unit`` is dimensionless)."""
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
@@ -101,7 +101,7 @@ def _quantity(ctx, where, value, unit, *, dimensionless):
 def _vector(ctx, where, value, n, unit, *, dimensionless):
     if not isinstance(value, list) or len(value) != n:
         raise ctx.error(where, f"expected a list of {n} values, got {value!r}")
-    return np.array([_quantity(ctx, f"{where}[{k}]", v, unit, dimensionless=dimensionless)
+    return np.array([parse_quantity(ctx, f"{where}[{k}]", v, unit, dimensionless=dimensionless)
                      for k, v in enumerate(value)])
 
 
@@ -159,7 +159,7 @@ class Spec:
 
 def parse(text: str, source: str = "<scenario>") -> Spec:
     """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field."""
-    ctx = _Ctx(source)
+    ctx = FieldContext(source)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -186,7 +186,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
             if k not in body:
                 raise ctx.error(f"[body] {k}", "missing; the heavy top needs mass_g (M g) and center_of_mass")
         force = U.MASS * U.LENGTH / U.TIME**2
-        heavy["mass_g"] = _quantity(ctx, "[body] mass_g", body["mass_g"], force, dimensionless=dimless)
+        heavy["mass_g"] = parse_quantity(ctx, "[body] mass_g", body["mass_g"], force, dimensionless=dimless)
         if heavy["mass_g"] < 0:
             raise ctx.error("[body] mass_g", f"{body['mass_g']!r} must be non-negative")
         heavy["center_of_mass"] = _vector(ctx, "[body] center_of_mass", body["center_of_mass"], 3, U.LENGTH,
@@ -238,7 +238,7 @@ def _parse_orbit(ctx, o):
     if "gm" in o and "central_body" in o:
         raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
     if "gm" in o:
-        out["gm"] = _quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False)
+        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False)
         if out["gm"] <= 0:
             raise ctx.error("[orbit] gm", f"{o['gm']!r} must be positive")
         out["central_body"] = None
@@ -247,19 +247,19 @@ def _parse_orbit(ctx, o):
     for k in ("a", "e", "i", "raan", "argp"):
         if k not in o:
             raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
-    out["a"] = _quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False)
+    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False)
     if out["a"] <= 0:
         raise ctx.error("[orbit] a", f"{o['a']!r} must be positive (elliptic orbits only)")
-    out["e"] = _quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
+    out["e"] = parse_quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
     if not 0 <= out["e"] < 1:
         raise ctx.error("[orbit] e", f"{o['e']!r} is outside [0, 1): only elliptic orbits are supported")
     for k in ("i", "raan", "argp"):
-        out[k] = _quantity(ctx, f"[orbit] {k}", o[k], U.ANGLE, dimensionless=False)
+        out[k] = parse_quantity(ctx, f"[orbit] {k}", o[k], U.ANGLE, dimensionless=False)
     anomalies = [k for k in ("true_anomaly", "mean_anomaly") if k in o]
     if len(anomalies) != 1:
         raise ctx.error("[orbit] true_anomaly", "give exactly one of true_anomaly or mean_anomaly")
     out["anomaly_kind"] = anomalies[0]
-    out["anomaly"] = _quantity(ctx, f"[orbit] {anomalies[0]}", o[anomalies[0]], U.ANGLE, dimensionless=False)
+    out["anomaly"] = parse_quantity(ctx, f"[orbit] {anomalies[0]}", o[anomalies[0]], U.ANGLE, dimensionless=False)
     if "epoch" in o:
         from astropy.time import Time
 
@@ -322,7 +322,7 @@ def _time(ctx, where, value, dimless, orbit):
         if orbit is None:
             raise ctx.error(where, f"{value!r} needs an [orbit]; give a time such as '100 s'")
         return ("orbits", n)
-    return ("time", _quantity(ctx, where, value, U.TIME, dimensionless=dimless))
+    return ("time", parse_quantity(ctx, where, value, U.TIME, dimensionless=dimless))
 
 
 def _parse_integration(ctx, g, dimless, orbit):
@@ -381,13 +381,13 @@ class Scenario:
         self.name = spec.name
         self.description = spec.description
         self.text = spec.text
-        ctx = _Ctx(str(path) if path else spec.name)
+        ctx = FieldContext(str(path) if path else spec.name)
         dimless = spec.dimensionless
         self.body = RigidBody(spec.inertia if dimless else spec.inertia * U.INERTIA)
         self.orbit = None
         self._kepler = None
         if spec.orbit is not None:
-            self._kepler = _build_kepler(ctx, spec.orbit)
+            self._kepler = build_kepler_orbit(ctx, spec.orbit)
         t_end = self._time(spec.integration["t_end"])
         step_out = self._time(spec.integration["output_step"])
         if step_out > t_end:
@@ -397,7 +397,7 @@ class Scenario:
         self.t_end = t_end
         if spec.orbit is not None:
             self.orbit = (self._kepler if spec.orbit["provider"] == "kepler"
-                          else _build_rebound(ctx, spec.orbit, self._kepler, float(self.times[-1])))
+                          else build_rebound_orbit(ctx, spec.orbit, self._kepler, float(self.times[-1])))
         if spec.potential_kind == "torque-free":
             self.potential = TorqueFree()
         elif spec.potential_kind == "heavy-top":
@@ -482,7 +482,7 @@ class Scenario:
         return f"Scenario({self.name!r}, method={self.method!r}, outputs={self.times.size})"
 
 
-def _build_kepler(ctx, o):
+def build_kepler_orbit(ctx, o):
     from .orbits import KeplerOrbit
 
     kw = {o["anomaly_kind"]: o["anomaly"] * U.ANGLE}
@@ -499,7 +499,7 @@ def _build_kepler(ctx, o):
         raise ctx.error("[orbit]", str(exc)) from None
 
 
-def _build_rebound(ctx, o, kepler, t_end):
+def build_rebound_orbit(ctx, o, kepler, t_end):
     from .orbits import ReboundOrbit
 
     try:

@@ -22,7 +22,7 @@ UNIT_TOLERANCE = 1e-6
 TANGENT_TOLERANCE = 1e-6
 
 
-def _unit_quaternion(q, name="q"):
+def unit_quaternion(q, name="q"):
     q = qt.as_quaternion(q, name)
     n = qt.norm(q)
     if np.any(n == 0.0):
@@ -53,7 +53,7 @@ class State:
         if not isinstance(body, RigidBody):
             raise InputError(f"body: expected a RigidBody, got {type(body).__name__}")
         self.body = body
-        self.q = _unit_quaternion(q)
+        self.q = unit_quaternion(q)
         Qv = U.strip(Q, body.momentum_unit, "Q", allow_plain=True)
         Qv = qt.as_quaternion(Qv, "Q")
         try:
@@ -76,7 +76,7 @@ class State:
     def from_omega(cls, body: RigidBody, q, omega):
         """From the attitude and the body angular velocity ``omega`` (body components;
         rad/s Quantity, or plain numbers for a dimensionless body)."""
-        q = _unit_quaternion(q)
+        q = unit_quaternion(q)
         w = U.strip(omega, body.rate_unit, "omega", allow_plain=body.dimensionless)
         if w.shape[-1:] != (3,):
             raise InputError(f"omega: expected 3 body-axis components, got shape {w.shape}")
@@ -85,7 +85,7 @@ class State:
     @classmethod
     def from_momentum(cls, body: RigidBody, q, g):
         """From the attitude and the body angular momentum ``g`` (body components)."""
-        q = _unit_quaternion(q)
+        q = unit_quaternion(q)
         gv = U.strip(g, body.momentum_unit, "g", allow_plain=True)
         if gv.shape[-1:] != (3,):
             raise InputError(f"g: expected 3 body-axis components, got shape {gv.shape}")

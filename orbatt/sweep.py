@@ -356,7 +356,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     ScenarioError
         Naming ``[sweep] key`` or ``[sweep.parameters.NAME] key``, the value and the fix.
     """
-    from .scenario import _quantity
+    from .scenario import parse_quantity
 
     for k in table:
         if k not in SWEEP_KEYS:
@@ -384,7 +384,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         cf = _CF[p.kind][1 if dimensionless else 0]
 
         def q(key, value, _where=where, _unit=unit, _dimless=dimless):
-            return _quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless)
+            return parse_quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless)
 
         d = raw[name]
         if not isinstance(d, dict):
@@ -490,7 +490,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     if "tumbling_angle" in table:
         if "tumbling" not in spec.outputs:
             raise ctx.error("[sweep] tumbling_angle", "only used with 'tumbling' in outputs; remove it or add the output")
-        spec.tumbling_angle = _quantity(ctx, "[sweep] tumbling_angle", table["tumbling_angle"], U.ANGLE,
+        spec.tumbling_angle = parse_quantity(ctx, "[sweep] tumbling_angle", table["tumbling_angle"], U.ANGLE,
                                         dimensionless=True)
         if not 0 < spec.tumbling_angle <= math.pi:
             raise ctx.error("[sweep] tumbling_angle", f"{table['tumbling_angle']!r} is outside (0, 180] deg")
@@ -797,12 +797,12 @@ def _orbit_groups(sc, spec, values, n):
     if not swept:
         return [(sc.orbit, sc.potential, np.arange(n))]
     from .potentials import GravityGradient
-    from .scenario import _Ctx, _build_kepler, _build_rebound
+    from .scenario import FieldContext, build_kepler_orbit, build_rebound_orbit
 
     cols = np.stack([values[k] for k in swept], axis=-1)
     keys, first, inverse = np.unique(cols, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)
-    ctx = _Ctx(sc.name)
+    ctx = FieldContext(sc.name)
     out = []
     for g in np.argsort(first):  # in order of first appearance
         o = dict(sc.spec.orbit)
@@ -814,16 +814,16 @@ def _orbit_groups(sc, spec, values, n):
                    "orbit_argp": "argp"}[k]] = float(v)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # periapsis warnings: the nominal scenario already warned
-            orbit = _build_kepler(ctx, o)
+            orbit = build_kepler_orbit(ctx, o)
             if o["provider"] == "rebound":
-                orbit = _build_rebound(ctx, o, orbit, float(sc.times[-1]))
+                orbit = build_rebound_orbit(ctx, o, orbit, float(sc.times[-1]))
         out.append((orbit, GravityGradient(orbit), np.flatnonzero(inverse == g)))
     return out
 
 
 def _initial_state(sc, spec, values, axis, inertia, orbit, idx):
     """``(q, Q)`` of the cases ``idx`` (module docstring: the initial state of a case)."""
-    from .state import State, _unit_quaternion
+    from .state import State, unit_quaternion
 
     m = idx.size
     frame = sc.spec.frame
@@ -855,7 +855,7 @@ def _initial_state(sc, spec, values, axis, inertia, orbit, idx):
         w = body_rate_from_orbital(orbit, t0, q_c, w)
     else:
         q = q_c
-    q = _unit_quaternion(q)
+    q = unit_quaternion(q)
     st = State(sc.body, q, cn.momentum_from_omega(q, w, I))
     return st.q, st.Q
 
@@ -932,7 +932,7 @@ def _energy(spec, sc, potential, orbit, inertia, q, Q, t):
 def _compute_chunk(sc, spec, job, units):
     import xarray as xr
 
-    from .dataset import QUAT_INDEX, QUAT_LABELS, AXIS_INDEX, AXIS_LABELS, _DIMENSIONAL, _DIMENSIONLESS, _var
+    from .dataset import QUAT_INDEX, QUAT_LABELS, AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, cf_variable
     from .dataset import to_dataset
     from .trajectory import Trajectory
 
@@ -941,7 +941,7 @@ def _compute_chunk(sc, spec, job, units):
     values = job["values"]
     axis = job["axis"]
     dimless = sc.spec.dimensionless
-    UN = _DIMENSIONLESS if dimless else _DIMENSIONAL
+    UN = DIMENSIONLESS_UNITS if dimless else DIMENSIONAL_UNITS
     inertia = np.array(np.broadcast_to(sc.spec.inertia, (n, 3)), dtype=np.float64)
     for k, name in enumerate(_INERTIA):
         if name in values:
@@ -991,46 +991,46 @@ def _compute_chunk(sc, spec, job, units):
             pieces.append(piece)
 
     case = start + np.arange(n)
-    coords = {"case": _var(("case",), case, "1", "sweep case (index into the sampled parameters)"),
-              "axis": _var(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
+    coords = {"case": cf_variable(("case",), case, "1", "sweep case (index into the sampled parameters)"),
+              "axis": cf_variable(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
               "axis_label": xr.Variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"})}
     if "final_state" in outs:
-        coords["quat"] = _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
+        coords["quat"] = cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                               quaternion_order="w x y z")
         coords["quat_label"] = xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"})
     for name in spec.parameters:
-        coords[name] = _var(("case",), values[name], units[name], f"sampled parameter: {PARAMETERS[name].long_name}")
+        coords[name] = cf_variable(("case",), values[name], units[name], f"sampled parameter: {PARAMETERS[name].long_name}")
     if axis is not None:
-        coords["attitude_axis"] = _var(("case", "axis"), axis, "1",
+        coords["attitude_axis"] = cf_variable(("case", "axis"), axis, "1",
                                        "axis of the initial attitude perturbation (unit vector)", frame="B")
     data = {}
     qattrs = {"quaternion_order": "w x y z", "frames": "B relative to S"}
     if "final_state" in outs:
-        data["q_initial"] = _var(("case", "quat"), qi, "1", "initial attitude quaternion", **qattrs)
-        data["Q_initial"] = _var(("case", "quat"), Qi, UN["momentum"], "initial conjugate momentum")
-        data["q_final"] = _var(("case", "quat"), qf, "1", "final attitude quaternion (at the last output time)",
+        data["q_initial"] = cf_variable(("case", "quat"), qi, "1", "initial attitude quaternion", **qattrs)
+        data["Q_initial"] = cf_variable(("case", "quat"), Qi, UN["momentum"], "initial conjugate momentum")
+        data["q_final"] = cf_variable(("case", "quat"), qf, "1", "final attitude quaternion (at the last output time)",
                                **qattrs)
-        data["Q_final"] = _var(("case", "quat"), Qf, UN["momentum"], "final conjugate momentum")
+        data["Q_final"] = cf_variable(("case", "quat"), Qf, UN["momentum"], "final conjugate momentum")
     if "trajectory" not in outs:
-        data["inertia"] = _var(("case", "axis"), inertia, UN["inertia"], "principal moments of inertia (I1, I2, I3)",
+        data["inertia"] = cf_variable(("case", "axis"), inertia, UN["inertia"], "principal moments of inertia (I1, I2, I3)",
                                frame="B")
     ref = (f"body axis {spec.pointing_axis.tolist()} vs the same axis of the {spec.pointing_reference} frame"
            if spec.pointing_axis is not None else f"rotation angle of the attitude relative to the "
                                                   f"{spec.pointing_reference} frame")
     if "max_pointing_error" in outs:
-        data["max_pointing_error"] = _var(("case",), perr, "rad", "maximum pointing error over the output times",
+        data["max_pointing_error"] = cf_variable(("case",), perr, "rad", "maximum pointing error over the output times",
                                           definition=ref)
     if "tumbling" in outs:
-        data["tumbling"] = _var(("case",), np.where(np.isnan(perr), -1, perr > spec.tumbling_angle).astype(np.int8),
+        data["tumbling"] = cf_variable(("case",), np.where(np.isnan(perr), -1, perr > spec.tumbling_angle).astype(np.int8),
                                 "1", "tumbling flag: maximum pointing error above tumbling_angle",
                                 flag_values=np.array([-1, 0, 1], dtype=np.int8),
                                 flag_meanings="failed not_tumbling tumbling", tumbling_angle_rad=spec.tumbling_angle,
                                 definition=ref)
     if "final_energy_error" in outs:
         what = ("H = T + U" if spec.energy == "hamiltonian" else "the Jacobi integral H - n h.G")
-        data["final_energy_error"] = _var(("case",), eerr, "1", f"relative change of the conserved energy "
+        data["final_energy_error"] = cf_variable(("case",), eerr, "1", f"relative change of the conserved energy "
                                           f"(E(t_end) - E(t0)) / |E(t0)|, E = {what}")
-    data["integration_failed"] = _var(("case",), failed.astype(np.int8), "1",
+    data["integration_failed"] = cf_variable(("case",), failed.astype(np.int8), "1",
                                       "1 where the integration of the case stopped (its values are NaN)",
                                       flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="ok failed")
     if pieces:
@@ -1073,9 +1073,9 @@ def _parse_part(name):
 
 def _done_parts(parts: Path, n_cases):
     """``[(start, stop, path)]`` of the complete parts (a damaged one is removed)."""
-    from .dataset import _check_engine
+    from .dataset import check_engine
 
-    engine = _check_engine(None)
+    engine = check_engine(None)
     done = []
     for f in sorted(parts.iterdir()):
         if f.name.startswith(".tmp-"):
@@ -1130,13 +1130,13 @@ def _chunks(missing, chunk_size):
 
 def _write_netcdf(ds, path):
     """:func:`orbatt.dataset.write_netcdf`, also for a Dataset without ``time`` (reductions)."""
-    from .dataset import _check_engine, _encode, _encoding, write_netcdf
+    from .dataset import check_engine, encode, encoding, write_netcdf
 
     if "time" in ds.dims:
         write_netcdf(ds, path)
         return
-    enc = _encode(ds)
-    enc.to_netcdf(path, engine=_check_engine(None), format="NETCDF4", encoding=_encoding(enc, 1, 1))
+    enc = encode(ds)
+    enc.to_netcdf(path, engine=check_engine(None), format="NETCDF4", encoding=encoding(enc, 1, 1))
 
 
 def _write_part(ds, parts: Path, start, stop):
@@ -1175,7 +1175,7 @@ def _open_client(scheduler, workers):
 
 
 def _finish_attrs(ds, sweep, stats, run):
-    from .dataset import CONVENTIONS, FRAMES, REFERENCE, _epoch_string, _json, _utc_now, _version
+    from .dataset import CONVENTIONS, FRAMES, REFERENCE, iso_epoch, to_json, utc_now, orbatt_version
 
     sc = sweep.scenario
     trajectory = "trajectory" in sweep.spec.outputs
@@ -1186,14 +1186,14 @@ def _finish_attrs(ds, sweep, stats, run):
     attrs.update({
         "Conventions": CONVENTIONS,
         "title": f"orbatt sweep: {sc.name} ({sweep.cases} cases)",
-        "source": f"orbatt {_version()}",
+        "source": f"orbatt {orbatt_version()}",
         "references": REFERENCE,
-        "orbatt_version": _version(),
+        "orbatt_version": orbatt_version(),
         "method": str(sc.method),
-        "method_settings": _json(settings),
+        "method_settings": to_json(settings),
         "integration_stats": json.dumps(stats, sort_keys=True),
         "integration_complete": np.int8(1),
-        "potential": _json(sc.potential.describe()),
+        "potential": to_json(sc.potential.describe()),
         "unit_system": "dimensionless (angles in rad)" if sc.spec.dimensionless else "kg km s rad",
         "frames": FRAMES,
         "quaternion_order": "w x y z",
@@ -1202,17 +1202,17 @@ def _finish_attrs(ds, sweep, stats, run):
         "sweep_t_end": float(sc.times[-1]),
     })
     if sc.orbit is not None:
-        attrs["orbit"] = _json(sc.orbit.describe())
-        ep = _epoch_string(sc.orbit.epoch)
+        attrs["orbit"] = to_json(sc.orbit.describe())
+        ep = iso_epoch(sc.orbit.epoch)
         if ep:
             attrs["epoch"] = ep
     elif "epoch" in attrs:
         del attrs["epoch"]
     attrs.update(sweep.attrs())
     attrs["sweep_run"] = json.dumps(run, sort_keys=True)
-    now = _utc_now()
+    now = utc_now()
     attrs["date_created"] = now
-    attrs["history"] = f"{now} orbatt {_version()}: sweep of {sweep.cases} cases ({run.get('scheduler')})"
+    attrs["history"] = f"{now} orbatt {orbatt_version()}: sweep of {sweep.cases} cases ({run.get('scheduler')})"
     ds.attrs = attrs
     return ds
 
@@ -1466,17 +1466,17 @@ def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=No
                 _sum_into(stats, ds.attrs.get("integration_stats"))
             ds = _concat(sorted(results, key=lambda d: int(d["case"].values[0])))
             return _finish_attrs(ds, sweep, stats, run)
-        from .dataset import _check_engine, _decode
+        from .dataset import check_engine, decode
 
         files = sorted((p for p in parts.iterdir() if _parse_part(p.name)), key=lambda p: _parse_part(p.name)[0])
         ranges = [_parse_part(p.name) for p in files]
         if ranges[0][0] != 0 or ranges[-1][1] != n_cases or any(r[1] != s[0] for r, s in zip(ranges, ranges[1:])):
             raise InputError(f"output: the parts in {str(parts)!r} do not cover cases 0..{n_cases - 1}; rerun with "
                              "--resume")
-        engine = _check_engine(None)
+        engine = check_engine(None)
         # reductions are small: read them now; trajectories stay on disk (dask) until written
         lazy = {"chunks": {}} if "trajectory" in sweep.spec.outputs else {}
-        opened = [_decode(xr.open_dataset(f, engine=engine, decode_times=False, decode_timedelta=False, **lazy))
+        opened = [decode(xr.open_dataset(f, engine=engine, decode_times=False, decode_timedelta=False, **lazy))
                   for f in files]
         if not lazy:
             opened = [d.load() for d in opened]
