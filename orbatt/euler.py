@@ -57,15 +57,6 @@ def hamiltonian(angles, momenta, inertia):
     return 0.5 * np.sum(g * g / np.asarray(inertia, dtype=np.float64), axis=-1)
 
 
-def heavy_top_potential(angles, mass_g, center_of_mass, sign=1.0):
-    """Heavy-top potential in Euler angles: ``sign * Mg * z_c`` with
-    ``z_c = x1 sin(theta) sin(psi) + x2 sin(theta) cos(psi) + x3 cos(theta)``."""
-    angles = np.asarray(angles, dtype=np.float64)
-    _, th, ps = np.moveaxis(angles, -1, 0)
-    x1, x2, x3 = center_of_mass
-    return sign * mass_g * (x1 * np.sin(th) * np.sin(ps) + x2 * np.sin(th) * np.cos(ps) + x3 * np.cos(th))
-
-
 def equations_of_motion(y, inertia, mass_g=0.0, center_of_mass=(0.0, 0.0, 0.0), sign=1.0):
     """Hamilton's equations in Euler variables for ``y = (phi, theta, psi, Phi, Theta, Psi)``
     (torque-free, or the heavy top when ``mass_g != 0``). Singular at ``sin theta = 0``.

@@ -11,6 +11,7 @@ import numpy as np
 
 from . import units as U
 from .body import RigidBody
+from .core import model as km
 from .core import potentials as kp
 from .errors import InputError
 
@@ -38,7 +39,12 @@ class Potential:
         """
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
         t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        return kp.evaluate_many(t, q, body.inertia_value, self.kind, self.params, self.table, kp.new_work())
+        return km.evaluate_many(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+
+    def kernel_model(self):
+        """The compiled model ``(terms, params, table)`` of this potential
+        (:mod:`orbatt.core.model`), built from its kernel specification."""
+        return km.from_spec(self.kind, self.params, self.table)
 
     def describe(self) -> dict:
         """Plain description (strings and numbers) for Dataset attributes and scenarios."""

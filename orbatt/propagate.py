@@ -69,6 +69,9 @@ import numpy as np
 from . import units as U
 from .body import RigidBody
 from .core import dop853 as kd
+from .core import dop853_lanes as kdl
+from .core import model as km
+from .core._jit import BAD_LANE_SHIFT
 from .core import potentials as kp
 from .core import splitting as ks
 from .core.hamiltonian import rhs as _rhs
@@ -118,6 +121,7 @@ class Problem:
     y0: np.ndarray
     inertia: np.ndarray
     kind: int
+    terms: np.ndarray
     params: np.ndarray
     table: np.ndarray
     ensemble: bool
@@ -316,7 +320,7 @@ class DOP853(Method):
         if p.step_ends:
             while True:
                 st = kd.advance(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.rec_t, self.rec_y,
-                                True, p.inertia[0], p.kind, p.params, p.table, self.WORK[0], self.rtol, self.atol,
+                                True, p.inertia[0], p.terms, p.params, p.table, self.WORK[0], self.rtol, self.atol,
                                 self.max_step, self.max_steps, budget)
                 if st != kd.BUFFER_FULL:
                     break
@@ -326,10 +330,10 @@ class DOP853(Method):
             self.status[0] = st
         elif p.members == 1 and not p.ensemble:
             self.status[0] = kd.advance(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.t_k,
-                                        self.out[0], False, p.inertia[0], p.kind, p.params, p.table, self.WORK[0],
+                                        self.out[0], False, p.inertia[0], p.terms, p.params, p.table, self.WORK[0],
                                         self.rtol, self.atol, self.max_step, self.max_steps, budget)
         else:
-            kd.advance_batch(self.Y, self.ST, self.CNT, self.F0, self.t_k, self.out, self.status, p.inertia, p.kind,
+            kd.advance_batch(self.Y, self.ST, self.CNT, self.F0, self.t_k, self.out, self.status, p.inertia, p.terms,
                              p.params, p.table, self.WORK, self.rtol, self.atol, self.max_step, self.max_steps, budget)
         bad = np.flatnonzero((self.status != kd.DONE) & (self.status != kd.PAUSED))
         if bad.size:
@@ -391,13 +395,13 @@ class DOP853Lanes(DOP853):
         p = self.p
         if self.t_k.shape[0] == 0:
             return True
-        kd.advance_lanes(self.Y, self.GST, self.GCNT, self.F0, self.t_k, self.out, self.gstatus, p.inertia, p.kind,
+        kdl.advance_lanes(self.Y, self.GST, self.GCNT, self.F0, self.t_k, self.out, self.gstatus, p.inertia, p.terms,
                          p.params, p.table, self.GWORK, self.lanes, self.rtol, self.atol, self.max_step,
                          self.max_steps, _budget_limit(budget))
         bad = np.flatnonzero((self.gstatus != kd.DONE) & (self.gstatus != kd.PAUSED))
         if bad.size:
             g = int(bad[0])
-            lane = int(self.GCNT[g, kd.CNT_FLAGS] >> 8) - 1
+            lane = int(self.GCNT[g, kd.CNT_FLAGS] >> BAD_LANE_SHIFT) - 1
             self._fail(int(self.gstatus[g]), float(self.GST[g, kd.ST_T]), g * self.lanes + max(lane, 0), p)
         return bool(np.all(self.gstatus == kd.DONE))
 
@@ -467,12 +471,12 @@ class _FixedStep(Method):
         if self.single:
             self.status[0] = ks.advance(self.Y[0], self.ST[0], self.GCNT[0], self.t_k, self.out[0], p.t0,
                                         float(self.step), self.kernel_method, self.flow, self.weight, self.toff,
-                                        self.AXES[0], self.COEF[0], p.inertia[0], p.kind, p.params, p.table,
+                                        self.AXES[0], self.COEF[0], p.inertia[0], p.terms, p.params, p.table,
                                         self.WORK[0], self.max_steps, budget)
         else:
             ks.advance_lanes(self.Y, self.ST, self.GCNT, self.t_k, self.out, self.status, p.t0, float(self.step),
                              self.kernel_method, self.flow, self.weight, self.toff, self.AXES, self.COEF, p.inertia,
-                             p.kind, p.params, p.table, self.GWORK, self.LANES, self.max_steps, budget)
+                             p.terms, p.params, p.table, self.GWORK, self.LANES, self.max_steps, budget)
         bad = np.flatnonzero((self.status != kd.DONE) & (self.status != kd.PAUSED))
         if bad.size:
             g = int(bad[0])
@@ -528,7 +532,7 @@ class Splitting(_FixedStep):
     def setup(self, p):
         kin = self.kinetic_option
         if kin == "auto":
-            kin = "shifted" if p.kind == kp.TORQUE_FREE else "axes"
+            kin = "shifted" if p.terms.shape[0] == 1 else "axes"
         self.kinetic = kin
         self.flow, self.weight, self.toff = ks.sequence(ks.COMPOSITIONS[self.composition][1], kin)
         self.AXES, self.COEF = ks.rotation_setup(p.inertia, kin)
@@ -601,7 +605,7 @@ class Scipy(Method):
 
         def fun(t, y):
             dy = np.empty(kd.NDIM)
-            _rhs(t, np.ascontiguousarray(y, dtype=np.float64), inertia, p.kind, p.params, p.table, work, dy)
+            _rhs(t, np.ascontiguousarray(y, dtype=np.float64), inertia, p.terms, p.params, p.table, work, dy)
             counter[e] += 1
             return dy
 
@@ -874,6 +878,8 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     sampled_span = None
     if kind == getattr(kp, "GRAVITY_GRADIENT_SAMPLED", -1) and params.size >= 3:
         sampled_span = (float(params[1]), float(params[2]))
+    terms, params, table = (potential.kernel_model() if hasattr(potential, "kernel_model")
+                            else km.from_spec(kind, params, table))
     # --- times
     tv = _times(t, "t", b0)
     span = _times(t_span, "t_span", b0)
@@ -949,7 +955,7 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
             raise InputError(f"step: {stepv!r} needs {n_needed} steps to reach {float(t_out[-1])!r}, more than "
                              f"max_steps = {max_steps}")
     problem = Problem(t0=t0, t_out=np.ascontiguousarray(t_out, dtype=np.float64), step_ends=step_ends, y0=y0,
-                      inertia=inertia, kind=kind, params=params, table=table, ensemble=ensemble)
+                      inertia=inertia, kind=kind, terms=terms, params=params, table=table, ensemble=ensemble)
     m = cls(rtol=rtol, atol=atol, step=stepv, max_steps=max_steps, **options)
     m.start(problem)
 

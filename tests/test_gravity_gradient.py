@@ -14,6 +14,7 @@ from orbatt import RigidBody
 from orbatt import canonical as cn
 from orbatt import quaternion as qt
 from orbatt.core import hamiltonian as ham
+from orbatt.core import model as km
 from orbatt.core import kepler as kk
 from orbatt.core import potentials as kp
 from orbatt.errors import InputError
@@ -163,12 +164,12 @@ def _classical_rhs(t, y, inertia, gm, orb, work):
 
 
 def _hamiltonian_solution(orbit, y0, t_eval, rtol=3e-14):
-    kind, params, table = orbit.kernel()
+    terms, params, table = km.from_spec(*orbit.kernel())
     work = kp.new_work()
 
     def f(t, y):
         dy = np.empty(8)
-        ham.rhs(t, y, INERTIA, kind, params, table, work, dy)
+        ham.rhs(t, y, INERTIA, terms, params, table, work, dy)
         return dy
 
     sol = solve_ivp(f, (t_eval[0], t_eval[-1]), y0, method="DOP853", rtol=rtol, atol=rtol * 1e-2, t_eval=t_eval)

@@ -9,6 +9,7 @@ from orbatt import canonical as cn
 from orbatt import euler as eu
 from orbatt import quaternion as qt
 from orbatt.core import hamiltonian as H
+from orbatt.core import model as km
 from orbatt.core import potentials as kp
 
 I = np.array([1.25, 1.0, 0.75])
@@ -19,10 +20,11 @@ RTOL = 1e-13
 
 def quaternion_rhs(kind=kp.TORQUE_FREE, params=np.zeros(1), inertia=I):
     work = kp.new_work()
+    model = km.from_spec(kind, params, kp.EMPTY_TABLE)
 
     def f(t, y):
         dy = np.empty(8)
-        H.rhs(t, y, inertia, kind, params, kp.EMPTY_TABLE, work, dy)
+        H.rhs(t, y, inertia, *model, work, dy)
         return dy
 
     return f
@@ -57,7 +59,7 @@ def test_kernel_matches_numpy_reference():
         Q = cn.momentum_from_body_momentum(q, rng.normal(size=3))
         for pot in (orbatt.TorqueFree(), hp):
             dy = np.empty(8)
-            H.rhs(0.0, np.r_[q, Q], I, pot.kind, pot.params, kp.EMPTY_TABLE, kp.new_work(), dy)
+            H.rhs(0.0, np.r_[q, Q], I, *pot.kernel_model(), kp.new_work(), dy)
             _, grad, _ = pot.evaluate(body, 0.0, q)
             qd, Qd = cn.hamilton_rhs(q, Q, I, grad[0])
             assert np.allclose(dy, np.r_[qd, Qd], atol=1e-15, rtol=1e-14)

@@ -3,4 +3,32 @@
 Unit system of the kernels: whatever consistent system the caller strips to. The API layer
 uses kilograms, kilometres and seconds (inertia in kg km^2, GM in km^3 s^-2, momenta in
 kg km^2 s^-1), or plain numbers for dimensionless scenarios.
+
+Modules: :mod:`._jit` (numba presets, intrinsics, status codes, flag names),
+:mod:`.qalg` (scalar quaternion algebra), :mod:`.kepler` and :mod:`.sampled` (orbits),
+:mod:`.potentials` (conservative terms), :mod:`.model` (the term list and the one dispatch
+on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+ :mod:`.dop853_coefficients`,
+:mod:`.dop853_lanes`) and :mod:`.splitting` (step loops).
+
+The paper's equations (Arribas, Elipe & Palacios 2006) and where they are computed:
+
+========  ==================================================  ==========================================
+equation  what                                                function
+========  ==================================================  ==========================================
+(5)       ``Q = 2 q g``, ``g = 1/2 Im(q~ Q)``                  :func:`orbatt.canonical.momentum_from_body_momentum`,
+                                                              :func:`orbatt.canonical.body_momentum`;
+                                                              compiled: :func:`.hamiltonian.kinetic_rates`
+(6)       kinetic energy ``T = 1/8 (I^-1 (x) q~Q).(q~Q)``      :func:`.hamiltonian.kinetic`,
+                                                              :func:`orbatt.canonical.kinetic_energy`
+(7)       Hamilton's equations in ``(q, Q)``                  :func:`.hamiltonian.eq7`, :func:`.hamiltonian.rhs`,
+                                                              :func:`.hamiltonian.rhs_lanes`; numpy form as
+                                                              printed: :func:`orbatt.canonical.hamilton_rhs`
+(10)      ``H`` in Euler angles and momenta                   :func:`orbatt.euler.hamiltonian`
+(12)      Euler 3-1-3 angles -> ``q``                         :func:`orbatt.quaternion.from_euler313`
+(13)      ``q`` -> Euler 3-1-3 angles                         :func:`orbatt.quaternion.to_euler313`
+(14)      Euler angles and momenta -> ``(q, Q)``              :func:`orbatt.euler.to_canonical`
+(15)      ``(q, Q)`` -> Euler angles and momenta              :func:`orbatt.euler.from_canonical`
+(18)      heavy top potential                                 :func:`.potentials.heavy_top`
+(20)      gravity gradient (MacCullagh) potential             :func:`.potentials.gravity_gradient`
+========  ==================================================  ==========================================
 """

@@ -40,8 +40,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
+
+from ._jit import jit, jit_inline
 
 ORB_ELEMENTS = 7
 ORB_SIZE = 15
@@ -57,11 +58,9 @@ _R6, _R12, _R20, _R30, _R42, _R56, _R72, _R90 = (1.0 / 6, 1.0 / 12, 1.0 / 20, 1.
                                                  1.0 / 72, 1.0 / 90)
 _R110, _R156, _R210, _R272, _R342 = 1.0 / 110, 1.0 / 156, 1.0 / 210, 1.0 / 272, 1.0 / 342
 
-_jit = nb.njit(cache=True)
-_jit_inline = nb.njit(cache=True, inline="always")
 
 
-@_jit_inline
+@jit_inline
 def _e_minus_sin(E):
     """``E - sin E`` for ``|E| <= 1`` from its series (no cancellation; 9 terms, rel. 5e-17)."""
     x2 = E * E
@@ -71,7 +70,7 @@ def _e_minus_sin(E):
             1.0 - x2 * _R342))))))))
 
 
-@_jit_inline
+@jit_inline
 def _one_minus_cos(s, c):
     """``1 - cos E`` from ``sin E, cos E`` without cancellation."""
     if c > 0.0:
@@ -79,7 +78,7 @@ def _one_minus_cos(s, c):
     return 1.0 - c
 
 
-@_jit
+@jit
 def _halley(m, e, E, s, c):
     """Halley iterations on ``E - e sin E = m`` from ``E`` with ``s, c = sin E, cos E``.
 
@@ -114,7 +113,7 @@ def _halley(m, e, E, s, c):
     return E, s, c
 
 
-@_jit_inline
+@jit_inline
 def _reduce(M):
     """``(m, k)`` with ``M = m + 2 pi k`` and ``m`` in ``[-pi, pi)`` (to rounding; the
     subtraction of ``2 pi k`` is exact up to one rounding of ``m``)."""
@@ -122,13 +121,13 @@ def _reduce(M):
     return ((M - k * _TWO_PI_C1) - k * _TWO_PI_C2) - k * _TWO_PI_C3, k
 
 
-@_jit_inline
+@jit_inline
 def _unreduce(Em, k):
     """``E_m + 2 pi k`` with the three-part ``2 pi``."""
     return k * _TWO_PI_C1 + ((Em + k * _TWO_PI_C3) + k * _TWO_PI_C2)
 
 
-@_jit
+@jit
 def _solve_cold(M, e):
     """``(E_m, sin E, cos E, k)``: ``E_m`` solves Kepler's equation for the reduced
     ``m = M - 2 pi k`` (so ``E = E_m + 2 pi k``)."""
@@ -140,7 +139,7 @@ def _solve_cold(M, e):
     return E, s, c, k
 
 
-@_jit
+@jit
 def _solve(M, e, work):
     """Warm-started solve. ``work[0], work[1], work[2]`` hold the previous call's ``M``,
     ``E`` (unreduced) and ``1 / (1 - e cos E)``; NaN in ``work[0]`` means no previous call.
@@ -169,7 +168,7 @@ def _solve(M, e, work):
     return E, s, c, k
 
 
-@_jit
+@jit
 def solve_kepler(M, e):
     """Eccentric anomaly ``E`` (rad, unreduced: same revolution as ``M``) with
     ``E - e sin E = M`` for ``0 <= e < 1``. Cold start (see the module docstring)."""
@@ -177,7 +176,7 @@ def solve_kepler(M, e):
     return _unreduce(E, k)
 
 
-@_jit
+@jit
 def solve_kepler_warm(M, e, work):
     """:func:`solve_kepler` warm-started from the previous call kept in ``work[0:3]``
     (``M``, ``E``, ``1 / (1 - e cos E)``; NaN in ``work[0]`` means no previous call).
@@ -187,7 +186,7 @@ def solve_kepler_warm(M, e, work):
     return _unreduce(E, k)
 
 
-@_jit
+@jit
 def true_anomaly(E, e):
     """True anomaly (rad) from the eccentric anomaly, on the same revolution as ``E``."""
     half = 0.5 * E
@@ -196,7 +195,7 @@ def true_anomaly(E, e):
     return f + _TWO_PI * round((E - f) / _TWO_PI)
 
 
-@_jit_inline
+@jit_inline
 def _perifocal(orb):
     """``(P, Q, sqrt(1 - e^2), 1 - e)`` from a full ``orb``, or computed from the angles
     for a 7-entry one."""
@@ -214,7 +213,7 @@ def _perifocal(orb):
     return P, Q, math.sqrt((1.0 - e) * (1.0 + e)), 1.0 - e
 
 
-@_jit
+@jit
 def kepler_radial(t, orb, work):
     """Radius and radial unit vector in ``S`` at time ``t``.
 
@@ -234,7 +233,7 @@ def kepler_radial(t, orb, work):
     return a * rr, (cf * P[0] + sf * Q[0], cf * P[1] + sf * Q[1], cf * P[2] + sf * Q[2])
 
 
-@_jit
+@jit
 def kepler_many(t, orb, gm):
     """The Keplerian orbit at the times ``t`` (array, any order; warm-started in sequence).
 
@@ -275,7 +274,7 @@ def kepler_many(t, orb, gm):
     return Eo, fo, ro, pos, vel
 
 
-@_jit
+@jit
 def orbital_quaternion(raan, inc, u):
     """3-1-3 Euler-parameter quaternion ``p`` of ``(raan, inc, u)``: maps ``O`` to ``S``."""
     ci = math.cos(0.5 * inc)

@@ -1,16 +1,17 @@
-"""Potentials ``U(q, t)``, their tangential gradients and torques (compiled, no units).
+"""Conservative terms: potentials ``U(q, t)`` and their tangential gradients (compiled, no
+units), and the body torque of a gradient.
 
 Every potential is extended off the unit sphere as a function of ``q/|q|`` (``DESIGN.md``
 §2): for a raw formula ``U_raw`` homogeneous of degree ``k`` in ``q``,
 ``U(q) = U_raw(q) / |q|^k`` and ``dU/dq = (grad U_raw - (q.grad U_raw) q / |q|^2) / |q|^k``.
 With this gradient ``|q| = 1`` and ``q.Q = 0`` are invariants of Hamilton's equations.
 
-Every kernel also takes ``work``, a per-trajectory float64 scratch array of length
-:data:`WORK_SIZE` filled with NaN at the start of a run (warm starts, e.g. of Kepler's
-equation; see :func:`new_work`).
+The kernels here are the terms of the model (:mod:`orbatt.core.model`, which dispatches on
+kinds and supplies the orbit); they are inlined into the step loops.
 
-A potential is selected by an integer ``kind`` and described by a float64 vector
-``params`` and a 2-D float64 ``table`` (samples for tabulated orbits; empty otherwise):
+Kernel specification of a potential (the older, one-potential form that the API objects
+``orbatt.TorqueFree``, ``HeavyTop``, ``GravityGradient`` still expose as ``kind``, ``params``,
+``table``; :func:`orbatt.core.model.from_spec` converts it to a model):
 
 ==================  ====  =====================================================================
 kind                code  params
@@ -25,14 +26,16 @@ gravity gradient,   3     ``[GM, t_first, t_last]``; ``table`` = the samples
 sampled orbit             ``[t, x, y, z, vx, vy, vz, ax, ay, az]`` of ``orbatt.core.sampled``
                           (quintic Hermite in time; REBOUND orbits)
 ==================  ====  =====================================================================
+
+Orbit-driven kernels take ``work``, a per-trajectory float64 scratch array of length
+:data:`WORK_SIZE` filled with NaN at the start of a run (warm starts of Kepler's equation
+and of the sampled orbit's interval search; see :func:`new_work`).
 """
 from __future__ import annotations
 
-import numba as nb
 import numpy as np
 
-from .kepler import kepler_radial
-from .sampled import sampled_radial
+from ._jit import jit_inline
 from .qalg import qconj, qdot, qmul, qscale
 
 TORQUE_FREE = 0
@@ -49,7 +52,7 @@ def new_work(*batch):
     return np.full(batch + (WORK_SIZE,), np.nan)
 
 
-@nb.njit(cache=True, inline="always")
+@jit_inline
 def _tangential(q, graw, degree):
     """Gradient of ``U_raw(q/|q|)`` from the raw gradient of a degree-``degree`` form."""
     n2 = qdot(q, q)
@@ -63,7 +66,7 @@ def _tangential(q, graw, degree):
     )
 
 
-@nb.njit(cache=True)
+@jit_inline
 def heavy_top(q, params):
     """Heavy top, eq. (18) with the sign chosen in ``params[0]``. Returns ``(U, dU/dq)``."""
     smg = params[0]
@@ -75,7 +78,7 @@ def heavy_top(q, params):
     return smg * w[3] / n2, _tangential(q, graw, 2)
 
 
-@nb.njit(cache=True)
+@jit_inline
 def gravity_gradient(q, inertia, k, xhat):
     """MacCullagh potential, eq. (20), for ``k = GM / r^3`` and radial unit vector ``xhat``
     (inertial components). Returns ``(U, dU/dq)``."""
@@ -88,43 +91,8 @@ def gravity_gradient(q, inertia, k, xhat):
     return uraw / (n2 * n2), _tangential(q, graw, 4)
 
 
-@nb.njit(cache=True)
-def potential(t, q, inertia, kind, params, table, work):
-    """Dispatch on ``kind``: ``(U, dU/dq)`` at time ``t`` and attitude ``q`` (4-tuple)."""
-    if kind == TORQUE_FREE:
-        return 0.0, (0.0, 0.0, 0.0, 0.0)
-    elif kind == HEAVY_TOP:
-        return heavy_top(q, params)
-    elif kind == GRAVITY_GRADIENT_KEPLER:
-        r, xhat = kepler_radial(t, params[1:], work)
-        return gravity_gradient(q, inertia, params[0] / (r * r * r), xhat)
-    elif kind == GRAVITY_GRADIENT_SAMPLED:
-        r, xhat = sampled_radial(t, table, work)
-        return gravity_gradient(q, inertia, params[0] / (r * r * r), xhat)
-    raise ValueError("unknown potential kind")
-
-
-@nb.njit(cache=True)
+@jit_inline
 def torque_from_gradient(q, grad):
     """Body-frame torque ``tau = -1/2 Im(q~ dU/dq)`` for a unit ``q``."""
     w = qmul(qconj(q), grad)
     return (-0.5 * w[1], -0.5 * w[2], -0.5 * w[3])
-
-
-@nb.njit(cache=True)
-def evaluate_many(t, q, inertia, kind, params, table, work):
-    """``U``, ``dU/dq`` and the body torque for arrays ``t (N,)``, ``q (N, 4)``."""
-    n = q.shape[0]
-    U = np.empty(n)
-    grad = np.empty((n, 4))
-    tau = np.empty((n, 3))
-    for i in range(n):
-        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        u, g = potential(t[i], qi, inertia, kind, params, table, work)
-        U[i] = u
-        tq = torque_from_gradient(qi, g)
-        for k in range(4):
-            grad[i, k] = g[k]
-        for k in range(3):
-            tau[i, k] = tq[k]
-    return U, grad, tau

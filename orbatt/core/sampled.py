@@ -28,17 +28,17 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
+
+from ._jit import jit, jit_inline
 
 TABLE_COLUMNS = 10
 #: index in ``work`` of the last interval used
 WORK_SLOT = 3
 
-_jit = nb.njit(cache=True)
 
 
-@_jit
+@jit
 def find_interval(table, t, work):
     """Index ``i`` with ``table[i, 0] <= t <= table[i + 1, 0]``; warm-started from
     ``work[3]``. Raises ``ValueError`` for ``t`` outside the sampled span."""
@@ -71,7 +71,7 @@ def find_interval(table, t, work):
     return lo
 
 
-@nb.njit(cache=True, inline="always")
+@jit_inline
 def _basis(s):
     """Quintic Hermite basis ``(H0..H5)`` and its first and second derivatives in ``s``."""
     s2 = s * s
@@ -87,7 +87,7 @@ def _basis(s):
     return H
 
 
-@nb.njit(cache=True, inline="always")
+@jit_inline
 def _dbasis(s):
     s2 = s * s
     s3 = s2 * s
@@ -100,7 +100,7 @@ def _dbasis(s):
             30.0 * s2 - 60.0 * s3 + 30.0 * s4)
 
 
-@nb.njit(cache=True, inline="always")
+@jit_inline
 def _ddbasis(s):
     s2 = s * s
     s3 = s2 * s
@@ -112,7 +112,7 @@ def _ddbasis(s):
             60.0 * s - 180.0 * s2 + 120.0 * s3)
 
 
-@nb.njit(cache=True, inline="always")
+@jit_inline
 def _combine(table, i, B, h, j):
     """Component ``j`` (0..2) of ``sum B_k c_k`` with the Hermite data of interval ``i``."""
     r0 = table[i]
@@ -122,7 +122,7 @@ def _combine(table, i, B, h, j):
             + h * h * (B[2] * r0[7 + j] + B[3] * r1[7 + j]))
 
 
-@_jit
+@jit
 def sampled_radial(t, table, work):
     """Radius and radial unit vector (inertial components) of a sampled orbit at ``t``.
 
@@ -137,7 +137,7 @@ def sampled_radial(t, table, work):
     return r, (x / r, y / r, z / r)
 
 
-@_jit
+@jit
 def sampled_many(t, table):
     """Position, velocity and acceleration ``(N, 3)`` each, interpolated at the times
     ``t`` (array; derivatives of the quintic Hermite polynomial)."""

@@ -56,10 +56,11 @@ import math
 import numba as nb
 import numpy as np
 
-from . import potentials as _pot
-from .dop853 import (BUFFER_FULL, DONE, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL,  # noqa: F401
-                     _gravity_gradient, _heavy_top, borrow, keepalive, potential, rhs, rhs_lanes)
-from .kepler import kepler_radial
+from ._jit import (DONE, EPS, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, jit, jit_inline,
+                   jit_parallel, keepalive)
+from .hamiltonian import rhs, rhs_lanes
+from .model import gradient, gradient_lanes
+from .qalg import qmul
 
 # ---------------------------------------------------------------------------------------
 # Compositions of the symmetric Strang step (palindromic coefficient lists). Each entry:
@@ -116,7 +117,6 @@ CNT_STEPS = 2   # steps taken (grid and partial)
 CNT_EVALS = 3   # gradient evaluations (splitting) or RHS evaluations (RK4)
 CNT_SIZE = 4
 
-_EPS = np.finfo(np.float64).eps
 
 
 def new_state(batch=None):
@@ -187,7 +187,7 @@ def rotation_setup(inertia, kinetic="shifted"):
 # Exact flows
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@jit_inline
 def _rot_axis(q, Q, axis, ctau):
     """Exact flow of ``c g_axis^2 / 2`` for a time ``tau`` (``ctau = c tau``)."""
     q0, q1, q2, q3 = q
@@ -213,17 +213,7 @@ def _rot_axis(q, Q, axis, ctau):
             (Q0 * c - Q3 * s, Q1 * c + Q2 * s, Q2 * c - Q1 * s, Q3 * c + Q0 * s))
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _qmul(a, b):
-    a0, a1, a2, a3 = a
-    b0, b1, b2, b3 = b
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
-            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
-            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
-
-
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@jit_inline
 def _rot_g(q, Q, ctau):
     """Exact flow of ``c |g|^2 / 2`` for a time ``tau`` (``ctau = c tau``): rotation about
     ``g`` by ``c |g| tau``."""
@@ -239,11 +229,11 @@ def _rot_g(q, Q, ctau):
     c = math.cos(half)
     s = math.sin(half) / nw
     u = (c, s * w1, s * w2, s * w3)
-    return _qmul(q, u), _qmul(Q, u)
+    return qmul(q, u), qmul(Q, u)
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, kind, params, table, work, gc, gvalid):
+@jit_inline
+def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, params, table, work, gc, gvalid):
     """One composed splitting step of length ``h`` from time ``t``. ``gc``/``gvalid``: the
     cached gradient at ``(t, q)``. Returns ``(q, Q, gc, gvalid, evaluations)``."""
     nev = 0
@@ -251,9 +241,9 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, kind, param
         f = flow[j]
         tau = weight[j] * h
         if f == KICK:
-            if kind != _pot.TORQUE_FREE:
+            if terms.shape[0] > 1:
                 if not gvalid:
-                    _, gc = potential(t + toff[j] * h, q, inertia, kind, params, table, work)
+                    _, gc = gradient(t + toff[j] * h, q, inertia, terms, params, table, work)
                     nev += 1
                     gvalid = True
                 Q = (Q[0] - tau * gc[0], Q[1] - tau * gc[1], Q[2] - tau * gc[2], Q[3] - tau * gc[3])
@@ -266,31 +256,31 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, kind, param
     return q, Q, gc, gvalid, nev
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _rk4_step(y, t, h, inertia, kind, params, table, work, k1, k2, k3, k4, ytmp):
+@jit_inline
+def _rk4_step(y, t, h, inertia, terms, params, table, work, k1, k2, k3, k4, ytmp):
     """Classical RK4 step, in place on ``y`` (4 RHS evaluations)."""
-    rhs(t, y, inertia, kind, params, table, work, k1)
+    rhs(t, y, inertia, terms, params, table, work, k1)
     for i in range(NDIM):
         ytmp[i] = y[i] + 0.5 * h * k1[i]
-    rhs(t + 0.5 * h, ytmp, inertia, kind, params, table, work, k2)
+    rhs(t + 0.5 * h, ytmp, inertia, terms, params, table, work, k2)
     for i in range(NDIM):
         ytmp[i] = y[i] + 0.5 * h * k2[i]
-    rhs(t + 0.5 * h, ytmp, inertia, kind, params, table, work, k3)
+    rhs(t + 0.5 * h, ytmp, inertia, terms, params, table, work, k3)
     for i in range(NDIM):
         ytmp[i] = y[i] + h * k3[i]
-    rhs(t + h, ytmp, inertia, kind, params, table, work, k4)
+    rhs(t + h, ytmp, inertia, terms, params, table, work, k4)
     for i in range(NDIM):
         y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@jit_inline
 def _finite(q, Q):
     s = q[0] + q[1] + q[2] + q[3] + Q[0] + Q[1] + Q[2] + Q[3]
     return abs(s) < np.inf
 
 
-@nb.njit(cache=True, error_model="numpy")
-def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, coef, inertia, kind,
+@jit
+def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, coef, inertia, terms,
             params, table, work, max_steps, budget):
     """Advance one trajectory on the grid ``t0 + k h`` through the output times
     ``t_out[cnt[CNT_IOUT]:]`` (increasing, ``>= t0 + cnt[CNT_K] h``); ``out_y[i]`` receives
@@ -308,6 +298,7 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
         return DONE
     y = borrow(y)
     inertia = borrow(inertia)
+    terms = borrow(terms)
     params = borrow(params)
     table = borrow(table)
     work = borrow(work)
@@ -330,7 +321,7 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
     while i_out < nout:
         tt = t_out[i_out]
         tk = t0 + k * h
-        tol = 4.0 * _EPS * max(abs(tt), abs(tk))
+        tol = 4.0 * EPS * max(abs(tt), abs(tk))
         if abs(tt - tk) <= tol:
             out_y[i_out, 0], out_y[i_out, 1], out_y[i_out, 2], out_y[i_out, 3] = q
             out_y[i_out, 4], out_y[i_out, 5], out_y[i_out, 6], out_y[i_out, 7] = Q
@@ -349,14 +340,14 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
             status = STEP_TOO_SMALL
             break
         if method == SPLITTING:
-            qn, Qn, gcn, gvn, ne = _split_step(q, Q, tk, step, flow, weight, toff, axes, coef, inertia, kind,
+            qn, Qn, gcn, gvn, ne = _split_step(q, Q, tk, step, flow, weight, toff, axes, coef, inertia, terms,
                                                params, table, work, gc, gvalid)
             nev += ne
         else:
             ytmp = scratch[0]
             ytmp[0], ytmp[1], ytmp[2], ytmp[3] = q
             ytmp[4], ytmp[5], ytmp[6], ytmp[7] = Q
-            _rk4_step(ytmp, tk, step, inertia, kind, params, table, work, scratch[1], scratch[2], scratch[3],
+            _rk4_step(ytmp, tk, step, inertia, terms, params, table, work, scratch[1], scratch[2], scratch[3],
                       scratch[4], scratch[5])
             nev += 4
             qn = (ytmp[0], ytmp[1], ytmp[2], ytmp[3])
@@ -391,29 +382,8 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
 # Groups of members on the common grid (ensembles)
 
 
-@nb.njit(cache=True, error_model="numpy")
-def _grad_lanes(t, yg, nl, I, kind, params, table, work, G):
-    """``dU/dq`` of lanes ``0..nl-1`` of ``yg (8, L)`` at time ``t`` into ``G (4, L)``: the
-    operations of :func:`orbatt.core.potentials.potential`, the orbit evaluated once."""
-    if kind == _pot.GRAVITY_GRADIENT_KEPLER:
-        r, xhat = kepler_radial(t, params[1:], work)
-        k = params[0] / (r * r * r)
-        for l in range(nl):
-            _, g = _gravity_gradient((yg[0, l], yg[1, l], yg[2, l], yg[3, l]), (I[0, l], I[1, l], I[2, l]), k, xhat)
-            G[0, l], G[1, l], G[2, l], G[3, l] = g
-    elif kind == _pot.HEAVY_TOP:
-        for l in range(nl):
-            _, g = _heavy_top((yg[0, l], yg[1, l], yg[2, l], yg[3, l]), params)
-            G[0, l], G[1, l], G[2, l], G[3, l] = g
-    else:
-        for l in range(nl):
-            _, g = potential(t, (yg[0, l], yg[1, l], yg[2, l], yg[3, l]), (I[0, l], I[1, l], I[2, l]), kind, params,
-                             table, work)
-            G[0, l], G[1, l], G[2, l], G[3, l] = g
-
-
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, kind, params, table, work, G, gvalid):
+@jit_inline
+def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, terms, params, table, work, G, gvalid):
     """:func:`_split_step` for the lanes of ``yg (8, L)``, in place; ``G (4, L)`` the cached
     gradients. Returns ``(gvalid, evaluations)``."""
     nev = 0
@@ -421,9 +391,9 @@ def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, kind, params,
         f = flow[j]
         tau = weight[j] * h
         if f == KICK:
-            if kind != _pot.TORQUE_FREE:
+            if terms.shape[0] > 1:
                 if not gvalid:
-                    _grad_lanes(t + toff[j] * h, yg, nl, I, kind, params, table, work, G)
+                    gradient_lanes(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
                     nev += 1
                     gvalid = True
                 for i in range(4):
@@ -446,29 +416,29 @@ def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, kind, params,
     return gvalid, nev
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _rk4_step_lanes(yg, nl, t, h, I, kind, params, table, work, K, ytmp):
+@jit_inline
+def _rk4_step_lanes(yg, nl, t, h, I, terms, params, table, work, K, ytmp, G):
     """:func:`_rk4_step` for the lanes of ``yg (8, L)`` (``K (4, 8, L)``), in place."""
-    rhs_lanes(t, yg, nl, I, kind, params, table, work, K[0])
+    rhs_lanes(t, yg, nl, I, terms, params, table, work, G, K[0])
     for i in range(NDIM):
         for l in range(nl):
             ytmp[i, l] = yg[i, l] + 0.5 * h * K[0, i, l]
-    rhs_lanes(t + 0.5 * h, ytmp, nl, I, kind, params, table, work, K[1])
+    rhs_lanes(t + 0.5 * h, ytmp, nl, I, terms, params, table, work, G, K[1])
     for i in range(NDIM):
         for l in range(nl):
             ytmp[i, l] = yg[i, l] + 0.5 * h * K[1, i, l]
-    rhs_lanes(t + 0.5 * h, ytmp, nl, I, kind, params, table, work, K[2])
+    rhs_lanes(t + 0.5 * h, ytmp, nl, I, terms, params, table, work, G, K[2])
     for i in range(NDIM):
         for l in range(nl):
             ytmp[i, l] = yg[i, l] + h * K[2, i, l]
-    rhs_lanes(t + h, ytmp, nl, I, kind, params, table, work, K[3])
+    rhs_lanes(t + h, ytmp, nl, I, terms, params, table, work, G, K[3])
     for i in range(NDIM):
         for l in range(nl):
             yg[i, l] += h / 6.0 * (K[0, i, l] + 2.0 * (K[1, i, l] + K[2, i, l]) + K[3, i, l])
 
 
-@nb.njit(cache=True, error_model="numpy")
-def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, coef, inertia, kind, params,
+@jit
+def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, coef, inertia, terms, params,
                   table, work, max_steps, budget):
     """:func:`advance` for a group of ``nl = Y.shape[0]`` members on the common grid.
 
@@ -481,6 +451,7 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
     i_out = cnt[CNT_IOUT]
     if i_out >= nout:
         return DONE
+    terms = borrow(terms)
     params = borrow(params)
     table = borrow(table)
     work = borrow(work)
@@ -521,7 +492,7 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
     while i_out < nout:
         tt = t_out[i_out]
         tk = t0 + k * h
-        tol = 4.0 * _EPS * max(abs(tt), abs(tk))
+        tol = 4.0 * EPS * max(abs(tt), abs(tk))
         if abs(tt - tk) <= tol:
             for l in range(nl):
                 for i in range(NDIM):
@@ -547,11 +518,11 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
             for i in range(4):
                 for l in range(nl):
                     Gn[i, l] = G[i, l]
-            gvn, ne = _split_step_lanes(yn, nl, tk, step, flow, weight, toff, AX, CF, I, kind, params, table, work,
+            gvn, ne = _split_step_lanes(yn, nl, tk, step, flow, weight, toff, AX, CF, I, terms, params, table, work,
                                         Gn, gvalid)
             nev += ne
         else:
-            _rk4_step_lanes(yn, nl, tk, step, I, kind, params, table, work, K, ytmp)
+            _rk4_step_lanes(yn, nl, tk, step, I, terms, params, table, work, K, ytmp, Gn)
             nev += 4
             gvn = False
         steps += 1
@@ -601,8 +572,8 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
     return status
 
 
-@nb.njit(cache=True, parallel=True, error_model="numpy")
-def advance_lanes(Y, ST, GCNT, t_out, out_y, status, t0, h, method, flow, weight, toff, AXES, COEF, inertia, kind,
+@jit_parallel
+def advance_lanes(Y, ST, GCNT, t_out, out_y, status, t0, h, method, flow, weight, toff, AXES, COEF, inertia, terms,
                   params, table, GWORK, lanes, max_steps, budget):
     """:func:`advance_group` over the groups ``[g lanes, (g + 1) lanes)`` of an ensemble, in
     parallel over groups; ``GCNT, GWORK, status`` have one row per group."""
@@ -615,5 +586,5 @@ def advance_lanes(Y, ST, GCNT, t_out, out_y, status, t0, h, method, flow, weight
         a = gi * lanes
         b = min(E, a + lanes)
         status[gi] = advance_group(Y[a:b], ST[a:b], GCNT[gi], t_out, out_y[a:b], t0, h, method, flow, weight, toff,
-                                   AXES[a:b], COEF[a:b], inertia[a:b], kind, params, table, GWORK[gi], max_steps,
+                                   AXES[a:b], COEF[a:b], inertia[a:b], terms, params, table, GWORK[gi], max_steps,
                                    budget)

@@ -1,0 +1,223 @@
+"""The term list: what acts on the body, evaluated in one loop (``DESIGN.md`` §10).
+
+The right-hand side of eq. (7) is the kinetic part plus the sum of the terms acting on the
+body. This module is the **only** place that dispatches on term kinds; the step loops of
+:mod:`orbatt.core.dop853` (single, batch, lockstep lanes) and :mod:`orbatt.core.splitting`
+all evaluate the terms through :func:`gradient` (one member) or :func:`gradient_lanes` (a
+lockstep group, the orbit evaluated once).
+
+A model is three plain arrays (in the caller's consistent unit system), built by
+:func:`build` from Python:
+
+``terms`` : int64 ``(1 + n_terms, TERM_FIELDS)``
+    Row 0 is the **orbit** the terms may read: ``[orbit kind, p0, p1, r0, r1]``; rows
+    ``1..n`` are the **terms** ``[term kind, p0, p1, r0, r1]``. ``params[p0:p1]`` are the
+    row's parameters and ``table[r0:r1]`` its table rows.
+``params`` : float64 ``(P,)``
+    Every row's parameters, concatenated.
+``table`` : float64 ``(R, C)``
+    Every row's table, stacked (``C`` the widest; narrower tables are zero-padded).
+
+=====================  ====  =====================================================================
+orbit kind             code  params / table
+=====================  ====  =====================================================================
+none                   0     (a model without orbit-driven terms)
+Keplerian              1     the ``orb`` vector of :mod:`orbatt.core.kepler` (15 entries)
+sampled                2     ``[t_first, t_last]``; table = samples ``[t, x, y, z, vx, vy, vz,
+                             ax, ay, az]`` of :mod:`orbatt.core.sampled` (quintic Hermite)
+=====================  ====  =====================================================================
+
+=====================  ====  =====================================================================
+term kind              code  params
+=====================  ====  =====================================================================
+heavy top (eq. 18)     1     ``[s Mg, xc1, xc2, xc3]`` (:func:`orbatt.core.potentials.heavy_top`)
+gravity gradient       2     ``[GM]``; reads the orbit's ``r`` and radial unit vector
+(eq. 20)                     (:func:`orbatt.core.potentials.gravity_gradient`)
+=====================  ====  =====================================================================
+
+Every term contributes ``(U, G)``: its potential and its generalized gradient, so that the
+momentum equation reads ``dQ/dt = 1/4 Q a - sum G`` (:mod:`orbatt.core.hamiltonian`).
+Conservative terms give the tangential gradient of their potential (``DESIGN.md`` §2). The
+sum starts from the first term's value (not from zero), so a model of one term gives exactly
+the numbers of that term alone.
+
+The older kernel specification of a potential, ``(kind, params, table)`` with the kinds of
+:mod:`orbatt.core.potentials`, converts with :func:`from_spec`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import jit, jit_inline
+from . import potentials as pot
+from .kepler import ORB_SIZE, kepler_radial
+from .sampled import TABLE_COLUMNS, sampled_radial
+
+# orbit kinds (row 0)
+ORBIT_NONE = 0
+ORBIT_KEPLER = 1
+ORBIT_SAMPLED = 2
+# term kinds (rows 1..n)
+HEAVY_TOP = 1
+GRAVITY_GRADIENT = 2
+
+#: columns of a ``terms`` row
+KIND, P0, P1, R0, R1 = 0, 1, 2, 3, 4
+TERM_FIELDS = 5
+
+#: terms that read the orbit
+ORBIT_TERMS = frozenset({GRAVITY_GRADIENT})
+
+
+# ---------------------------------------------------------------------------------------
+# Kernels
+
+
+@jit_inline
+def orbit_radial(t, terms, params, table, work):
+    """Radius and radial unit vector (inertial components) of the model's orbit at ``t``;
+    ``(1, (1, 0, 0))`` when the model has no orbit."""
+    kind = terms[0, KIND]
+    if kind == ORBIT_KEPLER:
+        return kepler_radial(t, params[terms[0, P0]:terms[0, P1]], work)
+    elif kind == ORBIT_SAMPLED:
+        return sampled_radial(t, table[terms[0, R0]:terms[0, R1]], work)
+    return 1.0, (1.0, 0.0, 0.0)
+
+
+@jit_inline
+def term(j, q, inertia, terms, params, r, xhat):
+    """``(U, G)`` of term row ``j`` at the attitude ``q`` (4-tuple), given the orbit's ``r``
+    and ``xhat`` at the same time. The one dispatch on term kinds."""
+    kind = terms[j, KIND]
+    p0 = terms[j, P0]
+    if kind == GRAVITY_GRADIENT:
+        return pot.gravity_gradient(q, inertia, params[p0] / (r * r * r), xhat)
+    elif kind == HEAVY_TOP:
+        return pot.heavy_top(q, params[p0:terms[j, P1]])
+    return 0.0, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit_inline
+def gradient(t, q, inertia, terms, params, table, work):
+    """``(U, G)``: the total potential and generalized gradient of all terms at time ``t`` and
+    attitude ``q`` (4-tuple); ``(0, 0)`` for an empty model."""
+    n = terms.shape[0]
+    U = 0.0
+    G = (0.0, 0.0, 0.0, 0.0)
+    if n > 1:
+        r, xhat = orbit_radial(t, terms, params, table, work)
+        U, G = term(1, q, inertia, terms, params, r, xhat)
+        for j in range(2, n):
+            u, g = term(j, q, inertia, terms, params, r, xhat)
+            U += u
+            G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
+    return U, G
+
+
+@jit_inline
+def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
+    """:func:`gradient` for lanes ``0..nl-1`` of ``Y (8, L)`` (inertia ``I (3, L)``) at the
+    common time ``t``, into ``G (4, L)``; the orbit is evaluated once for the group. Returns
+    False (``G`` untouched) for an empty model. The lane loops are innermost so that LLVM
+    vectorizes them (the kind test is loop-invariant)."""
+    n = terms.shape[0]
+    if n <= 1:
+        return False
+    r, xhat = orbit_radial(t, terms, params, table, work)
+    for l in range(nl):
+        _, g = term(1, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]), terms, params, r, xhat)
+        G[0, l], G[1, l], G[2, l], G[3, l] = g
+    for j in range(2, n):
+        for l in range(nl):
+            _, g = term(j, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]), terms, params, r,
+                        xhat)
+            for i in range(4):
+                G[i, l] += g[i]
+    return True
+
+
+@jit
+def evaluate_many(t, q, inertia, terms, params, table, work):
+    """``U (N,)``, ``G (N, 4)`` and the body torque ``tau (N, 3)`` of the model at the times
+    ``t (N,)`` and attitudes ``q (N, 4)``."""
+    n = q.shape[0]
+    U = np.empty(n)
+    grad = np.empty((n, 4))
+    tau = np.empty((n, 3))
+    inertia_t = (inertia[0], inertia[1], inertia[2])
+    for i in range(n):
+        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        u, g = gradient(t[i], qi, inertia_t, terms, params, table, work)
+        U[i] = u
+        tq = pot.torque_from_gradient(qi, g)
+        for k in range(4):
+            grad[i, k] = g[k]
+        for k in range(3):
+            tau[i, k] = tq[k]
+    return U, grad, tau
+
+
+# ---------------------------------------------------------------------------------------
+# Building models (Python)
+
+
+def build(orbit=None, terms=()):
+    """Pack an orbit and a list of terms into the arrays ``(terms, params, table)``.
+
+    Parameters
+    ----------
+    orbit : None or (int, array_like, array_like or None)
+        ``(orbit kind, params, table)``; None: no orbit (:data:`ORBIT_NONE`).
+    terms : sequence of (int, array_like, array_like or None)
+        ``(term kind, params, table)`` of each term, in evaluation order.
+
+    Returns
+    -------
+    terms : ndarray int64 (1 + n, TERM_FIELDS)
+    params : ndarray float64 (P,)
+    table : ndarray float64 (R, C), C-contiguous and writeable
+    """
+    rows = [(ORBIT_NONE, (), None) if orbit is None else orbit, *terms]
+    spec = np.zeros((len(rows), TERM_FIELDS), dtype=np.int64)
+    plist, tlist = [], []
+    p = r = 0
+    for k, (kind, par, tab) in enumerate(rows):
+        par = np.asarray(par, dtype=np.float64).ravel()
+        tab = np.zeros((0, 0)) if tab is None else np.asarray(tab, dtype=np.float64)
+        if tab.ndim != 2:
+            raise ValueError(f"model row {k}: the table must be 2-D, got shape {tab.shape}")
+        spec[k] = (int(kind), p, p + par.size, r, r + tab.shape[0])
+        plist.append(par)
+        tlist.append(tab)
+        p += par.size
+        r += tab.shape[0]
+    width = max((t.shape[1] for t in tlist), default=0)
+    table = np.zeros((r, width))
+    for (_, _, _, r0, r1), tab in zip(spec, tlist):
+        if r1 > r0:
+            table[r0:r1, :tab.shape[1]] = tab
+    params = np.concatenate(plist) if p else np.zeros(1)
+    return spec, params, table
+
+
+def from_spec(kind, params, table):
+    """The model of a potential given by its kernel specification ``(kind, params, table)``
+    (kinds of :mod:`orbatt.core.potentials`)."""
+    kind = int(kind)
+    params = np.asarray(params, dtype=np.float64).ravel()
+    if kind == pot.TORQUE_FREE:
+        return build()
+    if kind == pot.HEAVY_TOP:
+        return build(terms=[(HEAVY_TOP, params[:4], None)])
+    if kind == pot.GRAVITY_GRADIENT_KEPLER:
+        if params.size < 1 + ORB_SIZE:
+            raise ValueError(f"gravity gradient (Keplerian): expected {1 + ORB_SIZE} params, got {params.size}")
+        return build(orbit=(ORBIT_KEPLER, params[1:], None), terms=[(GRAVITY_GRADIENT, params[:1], None)])
+    if kind == pot.GRAVITY_GRADIENT_SAMPLED:
+        table = np.asarray(table, dtype=np.float64)
+        if table.ndim != 2 or table.shape[1] != TABLE_COLUMNS or table.shape[0] < 2:
+            raise ValueError(f"gravity gradient (sampled orbit): expected a table of shape (N >= 2, {TABLE_COLUMNS}), "
+                             f"got {table.shape}")
+        return build(orbit=(ORBIT_SAMPLED, params[1:3], table), terms=[(GRAVITY_GRADIENT, params[:1], None)])
+    raise ValueError(f"unknown potential kind {kind}")
