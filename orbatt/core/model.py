@@ -86,54 +86,98 @@ def orbit_radial(t, terms, params, table, work):
 
 
 @jit_inline
-def term(j, q, inertia, terms, params, r, xhat):
-    """``(U, G)`` of term row ``j`` at the attitude ``q`` (4-tuple), given the orbit's ``r``
-    and ``xhat`` at the same time. The one dispatch on term kinds."""
+def term_constants(j, terms, params, r, xhat):
+    """``(kind, c)``: the kind of term row ``j`` and the four constants it needs at one time
+    (read once per evaluation, outside any loop over members: gravity gradient
+    ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``)."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
     if kind == GRAVITY_GRADIENT:
-        return pot.gravity_gradient(q, inertia, params[p0] / (r * r * r), xhat)
+        return kind, (params[p0] / (r * r * r), xhat[0], xhat[1], xhat[2])
     elif kind == HEAVY_TOP:
-        return pot.heavy_top(q, params[p0:terms[j, P1]])
+        return kind, (params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
+    return kind, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit_inline
+def term_value(kind, c, q, inertia):
+    """``(U, G)`` of a term of ``kind`` with constants ``c`` (:func:`term_constants`) at the
+    attitude ``q`` (4-tuple) of a body of principal moments ``inertia``. The one dispatch on
+    term kinds."""
+    if kind == GRAVITY_GRADIENT:
+        return pot.gravity_gradient(q, inertia, c[0], (c[1], c[2], c[3]))
+    elif kind == HEAVY_TOP:
+        return pot.heavy_top(q, c)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit_inline
+def terms_at(q, inertia, terms, params, r, xhat):
+    """``(U, G)`` summed over the terms (rows ``1..n``) at the attitude ``q`` (4-tuple), the
+    orbit's ``r`` and ``xhat`` given; starts from the first term's value."""
+    kind, c = term_constants(1, terms, params, r, xhat)
+    U, G = term_value(kind, c, q, inertia)
+    for j in range(2, terms.shape[0]):
+        kind, c = term_constants(j, terms, params, r, xhat)
+        u, g = term_value(kind, c, q, inertia)
+        U += u
+        G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
+    return U, G
 
 
 @jit_inline
 def gradient(t, q, inertia, terms, params, table, work):
     """``(U, G)``: the total potential and generalized gradient of all terms at time ``t`` and
     attitude ``q`` (4-tuple); ``(0, 0)`` for an empty model."""
-    n = terms.shape[0]
-    U = 0.0
-    G = (0.0, 0.0, 0.0, 0.0)
-    if n > 1:
+    if terms.shape[0] > 1:
         r, xhat = orbit_radial(t, terms, params, table, work)
-        U, G = term(1, q, inertia, terms, params, r, xhat)
-        for j in range(2, n):
-            u, g = term(j, q, inertia, terms, params, r, xhat)
-            U += u
-            G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
-    return U, G
+        return terms_at(q, inertia, terms, params, r, xhat)
+    return 0.0, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit_inline
+def _term_lanes(kind, c, Y, nl, I, G, first):
+    """One term over the lanes into ``G`` (``first``: assign, else add)."""
+    if first:
+        for l in range(nl):
+            _, g = term_value(kind, c, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]))
+            G[0, l], G[1, l], G[2, l], G[3, l] = g
+    else:
+        for l in range(nl):
+            _, g = term_value(kind, c, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]))
+            G[0, l] += g[0]
+            G[1, l] += g[1]
+            G[2, l] += g[2]
+            G[3, l] += g[3]
+
+
+@jit_inline
+def terms_lanes(Y, nl, I, terms, params, r, xhat, G):
+    """:func:`terms_at` for lanes ``0..nl-1`` of ``Y (8, L)`` (inertia ``I (3, L)``) into
+    ``G (4, L)``, the same sums in the same order as one member. One loop over the lanes per
+    term, specialized to the term's kind (a constant kind makes :func:`term_value`'s
+    dispatch fold away, so that LLVM vectorizes the loop: it does not unswitch a loop on a
+    run-time kind); kinds without a specialization take the generic loop."""
+    for j in range(1, terms.shape[0]):
+        kind, c = term_constants(j, terms, params, r, xhat)
+        first = j == 1
+        if kind == GRAVITY_GRADIENT:
+            _term_lanes(GRAVITY_GRADIENT, c, Y, nl, I, G, first)
+        elif kind == HEAVY_TOP:
+            _term_lanes(HEAVY_TOP, c, Y, nl, I, G, first)
+        else:
+            _term_lanes(kind, c, Y, nl, I, G, first)
 
 
 @jit_inline
 def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
     """:func:`gradient` for lanes ``0..nl-1`` of ``Y (8, L)`` (inertia ``I (3, L)``) at the
     common time ``t``, into ``G (4, L)``; the orbit is evaluated once for the group. Returns
-    False (``G`` untouched) for an empty model. The lane loops are innermost so that LLVM
-    vectorizes them (the kind test is loop-invariant)."""
-    n = terms.shape[0]
-    if n <= 1:
+    False (``G`` untouched) for an empty model."""
+    if terms.shape[0] <= 1:
         return False
     r, xhat = orbit_radial(t, terms, params, table, work)
-    for l in range(nl):
-        _, g = term(1, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]), terms, params, r, xhat)
-        G[0, l], G[1, l], G[2, l], G[3, l] = g
-    for j in range(2, n):
-        for l in range(nl):
-            _, g = term(j, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]), terms, params, r,
-                        xhat)
-            for i in range(4):
-                G[i, l] += g[i]
+    terms_lanes(Y, nl, I, terms, params, r, xhat, G)
     return True
 
 
