@@ -5,7 +5,7 @@ from __future__ import annotations
 import astropy.units as u
 import numpy as np
 import pytest
-from method_cases import GG, angle, random_states
+from method_cases import GG, Spec, angle, random_states
 
 import orbatt
 from orbatt import analytic
@@ -95,3 +95,31 @@ def test_quantity_times(sat):
     c = orbatt.propagate(body, s0, GG, [0.0, 600.0], method="splitting4", step=1 * u.min)
     assert c.settings["step"] == 60.0
     assert angle(c.q[-1], b.q[-1]) < 1e-6
+
+
+def test_propagation_stays_inside_the_potentials_time_span(sat):
+    """A potential defined on a limited span (a sampled orbit) says so with ``time_span``;
+    propagate refuses to leave it before integrating."""
+    body, s0 = sat
+    assert orbatt.TorqueFree().time_span is None
+    limited = Spec(GG.kind, GG.params)
+    limited.time_span = (0.0, 600.0)
+    orbatt.propagate(body, s0, limited, [0.0, 600.0], rtol=1e-8)
+    for kw in (dict(t=[0.0, 601.0]), dict(t=[-1.0, 600.0]), dict(t_span=(0.0, 700.0))):
+        with pytest.raises(InputError, match=r"leaves the span \[0.0, 600.0\] of the sampled orbit"):
+            orbatt.propagate(body, s0, limited, **kw)
+
+
+def test_gravity_gradient_time_span_is_its_orbits(sat):
+    pytest.importorskip("rebound")
+    from orbatt.orbits import KeplerOrbit, ReboundOrbit
+
+    body, s0 = sat
+    kepler = KeplerOrbit(7000 * u.km, 0.2, 30 * u.deg, 45 * u.deg, 15 * u.deg, true_anomaly=0 * u.deg,
+                         body_radius=None)
+    assert kepler.time_span is None and orbatt.GravityGradient(kepler).time_span is None
+    sampled = ReboundOrbit(kepler, 600 * u.s)
+    gg = orbatt.GravityGradient(sampled)
+    assert gg.time_span == sampled.time_span == (0.0, sampled.t_last) == (0.0, float(gg.params[2]))
+    with pytest.raises(InputError, match="leaves the span"):
+        orbatt.propagate(body, s0, gg, [0.0, sampled.t_last + 1.0])
