@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import units as U
 from ..body import RigidBody
+from ..core.dop853 import NDIM
 from ..errors import InputError
 from ..state import State
 
@@ -23,8 +24,6 @@ __all__ = ["Problem", "KernelSpec", "kernel_spec", "bodies_of", "initial_states"
 DEFAULT_MAX_STEPS = 100_000_000
 #: smallest rtol accepted (10 machine epsilons, as in Hairer's dop853)
 MIN_RTOL = 10.0 * np.finfo(np.float64).eps
-#: width of the state (q, Q)
-NDIM = 8
 
 
 class KernelSpec(NamedTuple):
