@@ -10,7 +10,10 @@ from .body import RigidBody
 from .dataset import open_dataset, to_dataset
 from .errors import InputError, IntegrationError, OrbattError
 from .potentials import HeavyTop, Potential, TorqueFree
-from .propagate import propagate
+from . import methods  # the subpackage; its function methods() is orbatt.methods.methods
+from .methods import METHODS, Method, Problem, register
+from .progress import ProgressInfo
+from .propagation import propagate
 from .scenario import Scenario, load_scenario
 from .state import State
 from . import orbital
@@ -26,6 +29,7 @@ except PackageNotFoundError:  # pragma: no cover - source tree without install
 
 __all__ = [
     "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",
+    "Method", "METHODS", "methods", "register", "Problem", "ProgressInfo",
     "OrbattError", "InputError", "IntegrationError",
     "quaternion", "canonical", "euler", "__version__",
     "KeplerOrbit", "ReboundOrbit", "GravityGradient", "orbital",

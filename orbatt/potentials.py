@@ -2,8 +2,8 @@
 :mod:`orbatt.core.potentials`).
 
 A potential object knows its kernel ``kind``, ``params`` and ``table`` (what the compiled
-integrators take) and evaluates ``U``, the tangential gradient ``dU/dq`` and the body-frame
-torque for arrays of times and attitudes.
+integrators take) and the times it is defined at (``time_span``), and evaluates ``U``, the
+tangential gradient ``dU/dq`` and the body-frame torque for arrays of times and attitudes.
 """
 from __future__ import annotations
 
@@ -26,6 +26,9 @@ class Potential:
     kind: int
     name: str
     table = kp.EMPTY_TABLE
+    #: ``None`` (defined at all times) or ``(t_first, t_last)``: the times the potential can
+    #: be evaluated at (in the body's time unit); :func:`orbatt.propagate` refuses to leave it
+    time_span = None
 
     def check_body(self, body: RigidBody):
         """Raise :class:`InputError` if this potential cannot act on ``body``."""
@@ -127,6 +130,9 @@ class GravityGradient(Potential):
     orbit : OrbitProvider
     kind, params, table
         The provider's kernel specification (:meth:`OrbitProvider.kernel`).
+    time_span : None or (float, float)
+        The orbit's ``time_span``: seconds since its epoch the orbit is available at (a
+        sampled orbit), None for all times.
     """
 
     name = "gravity-gradient"
@@ -141,6 +147,10 @@ class GravityGradient(Potential):
         self.orbit = orbit
         self.kind, self.params, self.table = orbit.kernel()
 
+    @property
+    def time_span(self):
+        return self.orbit.time_span
+
     def check_body(self, body):
         if body.dimensionless:
             raise InputError("body: the gravity-gradient potential needs a dimensional body (GM is in km^3/s^2); "
@@ -151,9 +161,9 @@ class GravityGradient(Potential):
         ``q (N, 4)``: ``U`` in kg km^2 s^-2, ``dU/dq`` ``(N, 4)``, body torque ``(N, 3)`` in
         kg km^2 s^-2 (N km)."""
         self.check_body(body)
-        if self.kind == kp.GRAVITY_GRADIENT_SAMPLED:
+        if self.time_span is not None:
             tt = np.asarray(t, dtype=np.float64)
-            lo, hi = self.params[1], self.params[2]
+            lo, hi = self.time_span
             if tt.size and (np.min(tt) < lo or np.max(tt) > hi):
                 raise InputError(f"t: times outside the sampled span [{lo}, {hi}] s of the REBOUND orbit; "
                                  "build the orbit with a larger t_end")

@@ -326,7 +326,7 @@ def _time(ctx, where, value, dimless, orbit):
 
 
 def _parse_integration(ctx, g, dimless, orbit):
-    from .propagate import METHODS
+    from .propagation import METHODS
 
     out = {"method": g.get("method", "dop853")}
     if out["method"] not in METHODS:
@@ -466,7 +466,7 @@ class Scenario:
             Further keyword arguments for :func:`orbatt.propagate` (e.g. ``rtol``).
         """
         from .dataset import to_dataset
-        from .propagate import propagate
+        from .propagation import propagate
 
         kw = dict(self.settings)
         kw.update(overrides)

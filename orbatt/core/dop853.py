@@ -43,11 +43,18 @@ import math
 import numba as nb
 import numpy as np
 
-from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_NONFINITE,  # noqa: F401
+from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_NONFINITE,
                    FLAG_REJECTED, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, jit, jit_inline,
                    jit_parallel, keepalive)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES, ORDER
-from .hamiltonian import rhs, rhs_lanes
+from .hamiltonian import rhs
+
+#: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
+#: flag names of :mod:`orbatt.core._jit`
+__all__ = ["advance", "advance_batch", "new_state", "momentum_scale", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
+           "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
+           "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_SIZE", "CNT_STEPS", "CNT_REJECTED",
+           "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
 
 # Step-size controller (Hairer's defaults for dop853): safety, bounds on h_new / h
 SAFETY = 0.9

@@ -70,6 +70,9 @@ class OrbitProvider:
         The instant ``t = 0``.
     central_body : str
         ``"earth"`` or ``"custom"``.
+    time_span : None or (float, float)
+        ``(t_first, t_last)`` (s): the times the provider answers for (a sampled orbit);
+        None: any time.
     """
 
     gm: float
@@ -77,6 +80,7 @@ class OrbitProvider:
     epoch = None
     central_body = "earth"
     name = "orbit"
+    time_span = None
 
     # ---- contract (subclasses implement state(), kernel(), describe()) ------------------
     def state(self, t):  # pragma: no cover - abstract

@@ -302,6 +302,11 @@ class ReboundOrbit(OrbitProvider):
         """Last sampled time (s): the provider answers for ``0 <= t <= t_last``."""
         return float(self._table[-1, 0])
 
+    @property
+    def time_span(self):
+        """``(t_first, t_last)`` (s): the sampled span, where the provider answers."""
+        return float(self._table[0, 0]), float(self._table[-1, 0])
+
     def _interp(self, t):
         t = as_times(t)
         flat = np.ascontiguousarray(t.reshape(-1))

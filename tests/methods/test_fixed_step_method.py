@@ -1,101 +1,26 @@
-"""The compiled integrators (orbatt.core.dop853, orbatt.core.splitting): coefficient data,
-exact flows, convergence orders against the exact free rigid body, invariants over long runs,
-energy boundedness, resumability."""
+"""orbatt.methods.fixed_step and the compiled fixed-step kernels (orbatt.core.splitting):
+splitting coefficients and exact flows, orders, invariants, energy, the output grid, groups
+of ensemble members."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
+from method_cases import (EMPTY, GG, I_FREE, I_SAT, PARAMS_GG, PARAMS_TOP, PERIOD, Y0, angle, exact_free,
+                          observed_orders, random_data, run_fixed)
 
+import orbatt
 from orbatt import analytic
 from orbatt import quaternion as qt
 from orbatt.core import dop853 as kd
-from orbatt.core import kepler
 from orbatt.core import potentials as kp
 from orbatt.core import splitting as ks
 from orbatt.core.hamiltonian import energy
-
-# ---------------------------------------------------------------------------------------
-# Problems: the paper's data (DESIGN.md §9)
-
-Q0_PAPER = np.array([0.5, -1 / math.sqrt(2), 0.0, 0.5])
-P0_PAPER = np.array([0.3, -0.848528, 0.141421, -1.5])
-# remove the printed data's radial residual (-9.7e-8, DESIGN.md §3a item 9) so that the
-# exact solution and the integrators start from the same point of the manifold
-P0_PAPER = P0_PAPER - (Q0_PAPER @ P0_PAPER) * Q0_PAPER
-Y0 = np.concatenate([Q0_PAPER, P0_PAPER])
-I_FREE = np.array([1.25, 1.0, 0.75])
-I_SAT = np.array([400.0, 500.0, 600.0])
-GM = 398600.4418
-A_ORB = 7000.0
-N_ORB = math.sqrt(GM / A_ORB**3)
-PERIOD = 2 * math.pi / N_ORB
-PARAMS_GG = np.concatenate([[GM], kepler.orbit_vector(A_ORB, 0.2, math.pi / 6, math.pi / 4, math.pi / 12, 0.0, N_ORB)])
-PARAMS_TOP = np.array([0.5, 1.0, 0.0, 0.0])
-EMPTY = np.zeros((0, 0))
-NO_PARAMS = np.zeros(1)
-
-
-def angle(q, qref):
-    """Rotation angle between attitudes (rad), sign-insensitive."""
-    w = qt.mul(qt.conj(np.asarray(qref)), np.asarray(q))
-    return 2 * np.arctan2(np.linalg.norm(w[..., 1:], axis=-1), np.abs(w[..., 0]))
-
-
-def exact_free(t):
-    q, Q = analytic.torque_free(I_FREE, Q0_PAPER, P0_PAPER, np.asarray(t, dtype=float))
-    return q, Q
-
-
-def run_dop853(t_out, inertia=I_FREE, kind=0, params=NO_PARAMS, rtol=1e-10, atol=1e-12, max_step=np.inf, y0=Y0,
-               budget=10**9, h0=0.0):
-    y = y0.copy()
-    st, cnt, f0 = kd.new_state()
-    st[kd.ST_H] = h0
-    out = np.zeros((len(t_out), 8))
-    work = kp.new_work()
-    status = kd.PAUSED
-    while status == kd.PAUSED:
-        status = kd.advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, inertia, kind,
-                            params, EMPTY, work, rtol, atol, max_step, 10**9, budget)
-    assert status == kd.DONE
-    return out, cnt
-
-
-def run_fixed(t_out, h, comp="strang", kinetic="axes", inertia=I_FREE, kind=0, params=NO_PARAMS, method=ks.SPLITTING,
-              y0=Y0, budget=10**12, work=None):
-    flow, weight, toff = ks.sequence(ks.COMPOSITIONS[comp][1], kinetic)
-    axes, coef = ks.rotation_setup(inertia, kinetic)
-    y = y0.copy()
-    st, cnt = ks.new_state()
-    out = np.zeros((len(t_out), 8))
-    work = kp.new_work() if work is None else work
-    status = kd.PAUSED
-    while status == kd.PAUSED:
-        status = ks.advance(y, st, cnt, np.asarray(t_out, dtype=float), out, 0.0, h, method, flow, weight, toff, axes,
-                            coef, inertia, kind, params, EMPTY, work, 10**12, budget)
-    assert status == kd.DONE
-    return out, cnt
-
+from orbatt.methods import METHODS
 
 # ---------------------------------------------------------------------------------------
 # Coefficient data
-
-
-def test_dop853_tableau_is_consistent():
-    # rows of A sum to the nodes, weights to 1, error estimators to 0
-    np.testing.assert_allclose(kd.A.sum(axis=1), kd.C, atol=1e-14)
-    assert kd.B.sum() == pytest.approx(1.0, abs=1e-14)
-    assert abs(kd.E5.sum()) < 1e-14 and abs(kd.E3.sum()) < 1e-14
-    # quadrature conditions of order 8: sum b_i c_i^k = 1 / (k + 1)
-    for k in range(8):
-        assert (kd.B * kd.C**k).sum() == pytest.approx(1.0 / (k + 1), abs=1e-13)
-    # the sparse copy of A used by the stage loop
-    for s in range(kd.N_STAGES):
-        row = np.zeros(kd.N_STAGES)
-        row[kd.A_COL[kd.A_PTR[s]:kd.A_PTR[s + 1]]] = kd.A_VAL[kd.A_PTR[s]:kd.A_PTR[s + 1]]
-        np.testing.assert_array_equal(row, kd.A[s])
 
 
 @pytest.mark.parametrize("name", sorted(ks.COMPOSITIONS))
@@ -188,11 +113,6 @@ def test_rotations_are_the_exact_flows_of_their_hamiltonians():
 # Convergence orders against the exact free rigid body
 
 
-def observed_orders(errors):
-    e = np.asarray(errors)
-    return np.log2(e[:-1] / e[1:])
-
-
 @pytest.mark.parametrize("comp,kinetic,steps", [
     ("strang", "axes", (100, 200, 400)),
     ("strang", "shifted", (100, 200, 400)),
@@ -222,50 +142,25 @@ def test_rk4_order_on_free_body():
     np.testing.assert_allclose(observed_orders(errs), 4.0, atol=0.15)
 
 
-def test_dop853_order_on_free_body():
-    """With loose tolerances the step is max_step everywhere: a fixed-step DOP853."""
-    T = 12.0
-    qref, _ = exact_free([T])
+def test_registered_splitting4_converges_at_order_4(free):
+    """``method="splitting4"`` (the registered class: McLachlan's composition, order 4)
+    through orbatt.propagate, against the exact free body."""
+    cls = METHODS["splitting4"]
+    assert cls.order == 4 and cls.composition == "mclachlan4" and cls.symplectic
+    body, s0 = free
+    T = 20.0
+    qref, _ = analytic.torque_free(body.inertia_value, s0.q, s0.Q, np.array([0.0, T]))
     errs = []
-    for n in (12, 48):
-        out, cnt = run_dop853([T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n)
-        assert cnt[kd.CNT_STEPS] == n and cnt[kd.CNT_REJECTED] == 0
-        errs.append(angle(out[-1, :4], qref[0]))
-    assert errs[-1] > 1e-13
-    # over h -> h/4 (before the error reaches round-off): measured 8.35; h -> h/2 gives 9.8
-    # then 6.9 (pre-asymptotic), identical to scipy's DOP853 with the same steps
-    assert observed_orders(errs)[0] / 2 == pytest.approx(8.0, abs=0.5)
-
-
-def test_dop853_meets_tolerance_on_free_body():
-    t = np.linspace(0.0, 50.0, 26)[1:]
-    qref, Qref = exact_free(t)
-    for rtol in (1e-8, 1e-12):
-        out, cnt = run_dop853(t, rtol=rtol, atol=rtol * 1e-2)
-        err = angle(out[:, :4], qref).max()
-        assert err < 200 * rtol
-        assert np.abs(out[:, 4:] - Qref).max() < 200 * rtol
-        assert cnt[kd.CNT_REJECTED] < 0.25 * cnt[kd.CNT_STEPS]
-
-
-def test_dop853_other_regime_and_separatrix():
-    """g circulating about the smallest-moment axis (D < I2), and on the separatrix."""
-    from orbatt import canonical as cn
-
-    # D < I2; a steady spin about axis 1; on the separatrix (g1^2 (1 - I2/I1) = g3^2 (I2/I3 - 1)),
-    # where errors grow exponentially (the motion approaches the unstable axis 2): shorter run
-    for g, T in (([0.2, 0.1, 1.0], 30.0), ([1.0, 0.0, 0.0], 30.0), ([math.sqrt(5 / 3), 0.0, 1.0], 7.0)):
-        q0 = Q0_PAPER
-        Q0 = cn.momentum_from_body_momentum(q0, np.array(g))
-        y0 = np.concatenate([q0, Q0])
-        t = np.array([T / 4, T])
-        qref, _ = analytic.torque_free(I_FREE, q0, Q0, t)
-        out, _ = run_dop853(t, rtol=1e-12, atol=1e-14, y0=y0)
-        assert angle(out[:, :4], qref).max() < 1e-11
+    for n in (50, 100, 200):
+        tr = orbatt.propagate(body, s0, orbatt.TorqueFree(), [0.0, T], method="splitting4", step=T / n)
+        assert tr.settings["order"] == 4 and tr.stats["steps"] == n
+        errs.append(angle(tr.q[-1], qref[-1]))
+    assert errs[-1] > 1e-12, "errors too small to measure the order"
+    np.testing.assert_allclose(observed_orders(errs), 4.0, atol=0.15)
 
 
 # ---------------------------------------------------------------------------------------
-# Invariants, energy, resumability
+# Invariants, energy, resumability, the output grid
 
 
 def test_splitting_keeps_constraints_to_roundoff():
@@ -322,13 +217,10 @@ def test_splitting_energy_bounded_over_long_run():
 
 
 @pytest.mark.parametrize("budget", [1, 7, 1000])
-def test_kernels_resume_exactly(budget):
+def test_fixed_step_kernel_resumes_exactly(budget):
     """Stopping every `budget` steps and calling again changes nothing (progress reports and
     KeyboardInterrupt rely on it)."""
     t = np.array([0.0, 0.3 * PERIOD, 0.5 * PERIOD])
-    ref, _ = run_dop853(t[1:], I_SAT, 2, PARAMS_GG, rtol=1e-9, atol=1e-11)
-    got, _ = run_dop853(t[1:], I_SAT, 2, PARAMS_GG, rtol=1e-9, atol=1e-11, budget=budget)
-    np.testing.assert_array_equal(got, ref)
     ref, _ = run_fixed(t, 7.3, "mclachlan4", "axes", I_SAT, 2, PARAMS_GG)
     got, _ = run_fixed(t, 7.3, "mclachlan4", "axes", I_SAT, 2, PARAMS_GG, budget=budget)
     np.testing.assert_array_equal(got, ref)
@@ -348,23 +240,9 @@ def test_splitting_outputs_do_not_perturb_the_grid():
     assert cnt[ks.CNT_STEPS] == round(T / h) + 2  # the grid plus one partial step per off-grid output
 
 
-def test_dop853_lands_on_output_times():
-    t = np.sort(np.random.default_rng(3).uniform(0, 30, 40))
-    qref, _ = exact_free(t)
-    out, _ = run_dop853(t, rtol=1e-12, atol=1e-14)
-    assert angle(out[:, :4], qref).max() < 1e-10
-
-
-def test_nonfinite_state_is_reported():
-    """A non-finite derivative: the kernels stop with NONFINITE and keep the last finite state."""
+def test_splitting_kernel_reports_a_nonfinite_state():
+    """A non-finite derivative: the kernel stops with NONFINITE and keeps the last finite state."""
     bad = np.array([np.inf, 1.0, 0.0, 0.0])  # heavy top with an infinite weight
-    y = Y0.copy()
-    st, cnt, f0 = kd.new_state()
-    out = np.zeros((1, 8))
-    status = kd.advance(y, st, cnt, f0, np.array([10.0]), np.empty(0), out, False, I_FREE, kp.HEAVY_TOP, bad, EMPTY,
-                        kp.new_work(), 1e-8, 1e-10, np.inf, 10**6, 10**6)
-    assert status == kd.NONFINITE
-    np.testing.assert_array_equal(y, Y0)
     flow, weight, toff = ks.sequence((1.0,), "axes")
     axes, coef = ks.rotation_setup(I_FREE, "axes")
     y = Y0.copy()
@@ -375,34 +253,19 @@ def test_nonfinite_state_is_reported():
     np.testing.assert_array_equal(y, Y0)
 
 
-def test_dop853_refuses_to_crawl():
-    """A derivative of 1e300: no NaN, but steps of 1e-300; the step-size floor (relative to the
-    time span) stops it instead of crawling for ever."""
-    y = Y0.copy()
-    st, cnt, f0 = kd.new_state()
-    status = kd.advance(y, st, cnt, f0, np.array([10.0]), np.empty(0), np.zeros((1, 8)), False, I_FREE,
-                        kp.HEAVY_TOP, np.array([1e300, 1.0, 0.0, 0.0]), EMPTY, kp.new_work(), 1e-8, 1e-10, np.inf,
-                        10**6, 10**6)
-    assert status in (kd.NONFINITE, kd.STEP_TOO_SMALL)
-    assert cnt[kd.CNT_STEPS] + cnt[kd.CNT_REJECTED] < 10_000
+# ---------------------------------------------------------------------------------------
+# Ensembles in groups
 
 
-@pytest.mark.parametrize("kind,inertia,params", [(kp.TORQUE_FREE, I_FREE, NO_PARAMS),
-                                                 (kp.HEAVY_TOP, I_FREE, PARAMS_TOP),
-                                                 (kp.GRAVITY_GRADIENT_KEPLER, I_SAT, PARAMS_GG)])
-def test_lane_rhs_equals_rhs(kind, inertia, params):
-    """The vectorized group right-hand side performs the operations of hamiltonian.rhs."""
-    from orbatt.core.hamiltonian import rhs
-
-    rng = np.random.default_rng(kind)
-    L = 13
-    Y = rng.normal(size=(8, L))
-    I = np.tile(inertia[:, None], (1, L)) * rng.uniform(0.9, 1.1, size=(3, L))
-    dY = np.empty((8, L))
-    work = kp.new_work()
-    for t in (0.0, 1234.5, 1300.0):
-        kd.rhs_lanes(t, Y, L, I, kind, params, EMPTY, work, dY)
-        for l in range(L):
-            dy = np.empty(8)
-            rhs(t, np.ascontiguousarray(Y[:, l]), np.ascontiguousarray(I[:, l]), kind, params, EMPTY, kp.new_work(), dy)
-            np.testing.assert_allclose(dY[:, l], dy, rtol=1e-14, atol=1e-300)
+def test_fixed_step_ensembles_in_several_groups_are_identical(sat):
+    """70 members = groups of 32, 32, 6 on the common grid: identical to one-by-one."""
+    body, _ = sat
+    q, g = random_data(70, seed=3)
+    t = np.array([0.0, 100.0, 250.3])
+    ens = orbatt.propagate(body, orbatt.State.from_momentum(body, q, g), GG, t, method="splitting2", step=7.0)
+    for e in (0, 31, 32, 69):
+        one = orbatt.propagate(body, orbatt.State.from_momentum(body, q[e], g[e]), GG, t, method="splitting2",
+                               step=7.0)
+        np.testing.assert_array_equal(ens.q[e], one.q)
+    assert ens.stats["steps"] == 70 * one.stats["steps"]
+    assert ens.stats["kicks"] == 70 * one.stats["kicks"]

@@ -1,0 +1,47 @@
+"""Integration methods: the :class:`Method` base class and registry (:mod:`.base`), the
+:class:`Problem` every method receives (:mod:`.problem`), and the drivers.
+
+Every method takes the same :class:`Problem` and gives :func:`orbatt.propagate` the same
+outputs (times, ``(q, Q)``, and the statistics ``steps``, ``rhs_evaluations`` or ``kicks``,
+``rejected_steps``).
+
+Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them)
+--------------------------------------------------------------------------------
+``"dop853"`` (default; :mod:`.dop853`)
+    Adaptive Dormand-Prince 8(5,3) with Hairer's error estimate and step-size control
+    (:mod:`orbatt.core.dop853`), the whole step loop compiled. ``rtol``/``atol`` mean what
+    they mean in :func:`scipy.integrate.solve_ivp`. Outputs are step-end values: the
+    integrator lands on every output time (no interpolation).
+``"dop853-lanes"`` (:mod:`.dop853`)
+    For ensembles: DOP853 on groups of ``lanes`` members (default 32) that share the step
+    size (controlled by the group's largest error) and the orbit evaluation, with the
+    per-member arithmetic vectorized. 5-10x the throughput of ``"dop853"`` on ensembles;
+    each member is at least as accurate as alone, but results are not bitwise those of
+    one-by-one runs.
+``"splitting2"``, ``"splitting4"``, ``"splitting6"`` (and named variants; :mod:`.fixed_step`)
+    Symplectic splitting (:mod:`orbatt.core.splitting`), fixed ``step``: Strang (order 2),
+    McLachlan's 5-stage composition (order 4; ``"splitting4-yoshida"``,
+    ``"splitting4-suzuki"`` are the alternatives), Kahan & Li's 9-stage composition (order
+    6; ``"splitting6-yoshida"``). Keep ``|q| = 1`` and ``q.Q = 0`` to round-off and, for
+    autonomous potentials, a bounded energy error over any number of steps. They are the
+    tool for long runs and ensembles, not for short high-accuracy runs: for the paper's
+    Keplerian case (10 orbits, 1e-9 rad) they need 3x (order 6) to 10x (order 4) the time of
+    ``"dop853"`` (``benchmarks/README.md``).
+``"rk4"`` (:mod:`.fixed_step`)
+    Classical fixed-step Runge-Kutta 4, compiled; a baseline.
+``"scipy-DOP853"``, ``"scipy-RK45"``, ``"scipy-RK23"``, ``"scipy-Radau"``, ``"scipy-BDF"``, ``"scipy-LSODA"`` (:mod:`.scipy_ivp`)
+    The reference path: scipy's solvers (Python step loop) on the compiled right-hand side,
+    restarted at every output time so that outputs are step-end values too.
+
+Writing a method: see :class:`Method` (the subclass contract) and :func:`register`.
+"""
+from __future__ import annotations
+
+from .base import METHODS, Method, methods, register, resolve_method
+from .dop853 import DOP853, DOP853Lanes
+from .fixed_step import RK4, FixedStep, Splitting
+from .problem import KernelSpec, Problem
+from .scipy_ivp import Scipy
+
+__all__ = ["Method", "METHODS", "methods", "register", "resolve_method", "Problem", "KernelSpec", "DOP853",
+           "DOP853Lanes", "FixedStep", "RK4", "Splitting", "Scipy"]
