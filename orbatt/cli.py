@@ -26,7 +26,7 @@ EXIT_FAILURE = 1
 
 
 def _version():
-    from . import __version__
+    from .version import __version__
 
     return __version__
 
