@@ -1,6 +1,7 @@
 """Results as an :class:`xarray.Dataset`: building from a :class:`~orbatt.trajectory.Trajectory`
 (:mod:`~orbatt.dataset.build`), NetCDF export/import, whole or appended as a run goes
-(:mod:`~orbatt.dataset.netcdf`), the ``ds.orbatt`` accessor (:mod:`~orbatt.dataset.accessor`),
+(:mod:`~orbatt.dataset.netcdf`), checks of output paths (:mod:`~orbatt.dataset.paths`), the
+``ds.orbatt`` accessor (:mod:`~orbatt.dataset.accessor`),
 quick plots (:mod:`~orbatt.dataset.plots`) and CCSDS AEM files (:mod:`~orbatt.dataset.aem`).
 
 Layout (``DESIGN.md`` §6)
@@ -64,12 +65,13 @@ from .aem import read_aem, write_aem
 from .build import (AXIS_INDEX, AXIS_LABELS, CONVENTIONS, EULER_313_LABELS, EULER_321_LABELS, FRAMES,
                     LABEL_COORDS, QUAT_INDEX, QUAT_LABELS, QUATERNION_ORDER, REFERENCE, cf_variable,
                     global_attrs, orbatt_version, to_dataset, to_json, utc_now)
-from .netcdf import (DEFAULT_CHUNK_TIME, NetCDFWriter, check_engine, decode, encode, encoding, open_dataset,
-                     write_netcdf)
+from .netcdf import (DEFAULT_CHUNK_TIME, TEMP_PREFIX, NetCDFWriter, check_engine, decode, encode, encoding,
+                     open_dataset, write_netcdf)
+from .paths import check_output_path, file_name, is_orbatt_result
 
 __all__ = [
     "to_dataset", "global_attrs", "open_dataset", "write_netcdf", "NetCDFWriter", "OrbattAccessor",
-    "read_aem", "write_aem",
+    "read_aem", "write_aem", "check_output_path", "file_name", "is_orbatt_result", "TEMP_PREFIX",
     "cf_variable", "check_engine", "encode", "encoding", "decode", "iso_epoch", "to_json", "utc_now",
     "orbatt_version", "to_euler321", "lvlh_angles", "unit_string", "parse_unit",
     "QUATERNION_ORDER", "QUAT_INDEX", "QUAT_LABELS", "AXIS_INDEX", "AXIS_LABELS", "EULER_313_LABELS",

@@ -13,6 +13,12 @@ from __future__ import annotations
 
 import json
 import os
+import secrets
+import signal
+import stat
+import sys
+import threading
+from contextlib import contextmanager
 
 import numpy as np
 import xarray as xr
@@ -21,9 +27,11 @@ from ..errors import InputError
 from .build import LABEL_COORDS, orbatt_version, utc_now
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
-           "DEFAULT_CHUNK_TIME"]
+           "TEMP_PREFIX", "DEFAULT_CHUNK_TIME"]
 
 DEFAULT_CHUNK_TIME = 16384
+#: name prefix of the temporary file written beside the target before the rename
+TEMP_PREFIX = ".tmp-"
 
 
 def _default_engine():
@@ -132,19 +140,99 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
     chunk_time : int
         Samples per chunk along ``time`` (HDF5 chunk shapes are ``(chunk_time, 4)`` etc.).
 
+    Raises
+    ------
+    KeyboardInterrupt
+        After the write, when Ctrl-C came during it: SIGINT is held back while the file is
+        written (in the main thread), so the file is complete either way.
+
     Notes
     -----
     ``time`` is an unlimited dimension. Values are stored as float64 without fill values:
     reading gives them back bit for bit.
+
+    A new file (``append=False``, or ``append=True`` on a missing file) is written to a
+    temporary file beside ``path`` (name starting with ``.tmp-``), flushed to disk and renamed
+    over ``path``: a kill during the write leaves the earlier file (and possibly a stray
+    ``.tmp-`` file), never a partial one under ``path``. An append writes into ``path`` in place.
+    Use :func:`orbatt.dataset.paths.check_output_path` first to refuse paths that are not
+    orbatt results.
     """
     engine = check_engine(engine)
     path = os.fspath(path)
-    if append and os.path.exists(path):
-        _append(ds, path, engine)
+    with _interrupts_deferred(path) as interrupted:
+        if append and os.path.exists(path):
+            _append(ds, path, engine)
+        else:
+            enc_ds = encode(ds)
+            _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
+                             encoding=encoding(enc_ds, complevel, chunk_time))
+    if interrupted:
+        raise KeyboardInterrupt
+
+
+def _write_replacing(ds: xr.Dataset, path, **to_netcdf):
+    """``ds.to_netcdf`` into a new temporary file beside ``path`` (``.tmp-<name>.<pid>.<hex>``),
+    flushed to disk, then renamed over ``path``: ``path`` is the earlier file or the complete new
+    one, never a partial one. The temporary file is removed on any exception; it keeps the mode
+    of the file it replaces (a new file gets the default mode of the umask)."""
+    folder, name = os.path.split(os.path.abspath(path))
+    tmp = os.path.join(folder, f"{TEMP_PREFIX}{name}.{os.getpid()}.{secrets.token_hex(4)}")
+    os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+    try:
+        ds.to_netcdf(tmp, **to_netcdf)
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:
+            os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))
+        except FileNotFoundError:
+            pass
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    try:  # the rename itself to disk
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError:
+        pass
+
+
+@contextmanager
+def _interrupts_deferred(path):
+    """Hold Ctrl-C (SIGINT) back while a file is written; yield a list that is non-empty when
+    one came.
+
+    A ``KeyboardInterrupt`` raised inside the NetCDF libraries can leave xarray's backend lock
+    held (a deadlock in ``store.close()``) and a partial file; deferred, the write finishes
+    (``write_netcdf`` then raises ``KeyboardInterrupt`` itself). Only in the main thread, and
+    only when SIGINT has Python's default handler; elsewhere nothing changes.
+    """
+    hits = []
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield hits
         return
-    enc_ds = encode(ds)
-    enc_ds.to_netcdf(path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
-                     encoding=encoding(enc_ds, complevel, chunk_time))
+
+    def hold(signum, frame):
+        if not hits:
+            print(f"orbatt: interrupt: finishing the write of {path} first", file=sys.stderr, flush=True)
+        hits.append(signum)
+
+    signal.signal(signal.SIGINT, hold)
+    try:
+        yield hits
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _append(ds: xr.Dataset, path, engine):
