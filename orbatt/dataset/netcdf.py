@@ -406,31 +406,3 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     ds = xr.open_dataset(os.fspath(path), engine=engine, **kwargs)
     ds = decode(ds)
     return ds.load() if load else ds
-
-
-def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
-    """Open an orbatt NetCDF file, giving back the Dataset :func:`to_dataset` built.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    engine : {"netcdf4", "h5netcdf"}, optional
-        Default as in :func:`write_netcdf`.
-    load : bool
-        Read all values into memory now (default: lazily, as :func:`xarray.open_dataset`).
-    **kwargs
-        Passed to :func:`xarray.open_dataset` (e.g. ``chunks`` for dask).
-
-    Returns
-    -------
-    xarray.Dataset
-        ``time`` as float seconds since the epoch (``units = "s"``; the CF ``"seconds since"``
-        of the file is undone), label coordinates as strings, every value bit for bit as
-        written.
-    """
-    engine = check_engine(engine)
-    kwargs.setdefault("decode_times", False)
-    kwargs.setdefault("decode_timedelta", False)
-    ds = xr.open_dataset(os.fspath(path), engine=engine, **kwargs)
-    ds = decode(ds)
-    return ds.load() if load else ds
