@@ -2,10 +2,8 @@
 Arribas, Elipe & Palacios (2006). Conventions: :mod:`orbatt.quaternion`."""
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version as _version
-
 from . import canonical, euler, quaternion
-from .aem import read_aem, write_aem
+from .dataset.aem import read_aem, write_aem
 from .body import RigidBody
 from .dataset import open_dataset, to_dataset
 from .errors import InputError, IntegrationError, OrbattError
@@ -21,11 +19,7 @@ from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to
 from .orbits import KeplerOrbit, ReboundOrbit
 from .potentials import GravityGradient
 from .sweep import Sweep, SweepError, load_sweep, run_sweep
-
-try:
-    __version__ = _version("orbatt")
-except PackageNotFoundError:  # pragma: no cover - source tree without install
-    __version__ = "0+unknown"
+from .version import __version__
 
 __all__ = [
     "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",

@@ -17,6 +17,7 @@ naming the time; ``--debug`` shows the traceback instead.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -26,7 +27,7 @@ EXIT_FAILURE = 1
 
 
 def _version():
-    from . import __version__
+    from .version import __version__
 
     return __version__
 
@@ -76,7 +77,8 @@ def _cmd_run(args):
     from .scenario import load_scenario
 
     sc = load_scenario(args.scenario)
-    out = Path(args.output) if args.output else Path(f"{sc.name}.nc")
+    out = _output_path(args, sc)
+    stem = _plot_stem(args, sc)
     t0 = time.perf_counter()
     ds = sc.run(method=args.method, progress=not args.quiet)
     wall = time.perf_counter() - t0
@@ -84,7 +86,7 @@ def _cmd_run(args):
     if not args.quiet:
         print(summary(ds, title=f"{sc.name} -> {out}", wall=wall))
     if args.plot:
-        for f in write_plots(ds, args.plot, stem=sc.name):
+        for f in write_plots(ds, args.plot, stem=stem):
             if not args.quiet:
                 print(f"figure: {f}")
     if not int(ds.attrs.get("integration_complete", 1)):
@@ -93,13 +95,45 @@ def _cmd_run(args):
     return 0
 
 
+def _output_path(args, sc, *, zarr=False):
+    """The output file of ``run``/``sweep``, checked before anything is computed: ``-o``, or
+    ``NAME.nc`` in the current folder (``name`` must then be a plain file name); never the
+    scenario file; only a writable folder; only over an earlier orbatt result
+    (:func:`orbatt.dataset.check_output_path`)."""
+    from .dataset import check_output_path, file_name
+    from .errors import InputError
+
+    what = "-o" if args.output else "name"
+    out = Path(args.output) if args.output else Path(file_name(sc.name, ".nc"))
+    src = Path(sc.path) if getattr(sc, "path", None) is not None else None
+    if src is not None and src.is_file() and out.exists() and os.path.samefile(src, out):
+        raise InputError(f"{what}: {str(out)!r} is the scenario file itself; give another output path "
+                         "such as -o result.nc")
+    return check_output_path(out, what=what, zarr=zarr)
+
+
+def _plot_stem(args, sc):
+    """The stem of the ``--plot`` figure names (``NAME-state.png`` ...), checked before the
+    run: ``name`` must be a plain file name, and ``--plot`` a folder (or a path to create)."""
+    if not args.plot:
+        return None
+    from .dataset import file_name
+    from .errors import InputError
+
+    file_name(sc.name, "-attitude.png")  # the longest of the three names
+    folder = Path(args.plot)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--plot: {args.plot!r} exists and is not a folder; give a folder for the figures")
+    return sc.name
+
+
 def _cmd_sweep(args):
     from .scenario import load_scenario
     from .sweep import Sweep, run_sweep
 
     sc = load_scenario(args.scenario)
+    out = _output_path(args, sc, zarr=True)
     sw = Sweep(sc, seed=args.seed)
-    out = Path(args.output) if args.output else Path(f"{sc.name}.nc")
 
     def report(info):
         if args.quiet:
@@ -230,18 +264,24 @@ def summary(ds, title="", wall=None) -> str:
 
 
 def write_plots(ds, folder, stem="orbatt"):
-    """Write the standard figures (state, attitude, drift) as PNG files; return their paths."""
+    """Write the standard figures (state, attitude, drift) as PNG files ``folder/STEM-KIND.png``;
+    return their paths. ``stem`` must be a plain file name (:func:`orbatt.dataset.file_name`:
+    names with path separators, control characters or a leading ``.`` are refused), so the
+    figures stay in ``folder``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from .dataset import file_name
+
     folder = Path(folder)
+    names = {kind: file_name(stem, f"-{kind}.png", what="name") for kind in ("state", "attitude", "drift")}
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
-    for kind in ("state", "attitude", "drift"):
+    for kind, name in names.items():
         fig = getattr(ds.orbatt, f"plot_{kind}")()
-        path = folder / f"{stem}-{kind}.png"
+        path = folder / name
         fig.savefig(path, dpi=120)
         plt.close(fig)
         paths.append(path)

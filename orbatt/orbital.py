@@ -31,7 +31,7 @@ from .orbits.base import OrbitProvider, as_times
 from .state import State
 
 __all__ = ["orbital_attitude", "inertial_attitude", "orbital_rate", "relative_rate", "body_rate_from_orbital",
-           "state_from_orbital", "to_orbital"]
+           "state_from_orbital", "to_orbital", "lvlh_angles", "LVLH_RELABEL"]
 
 
 def _check_orbit(orbit):
@@ -172,3 +172,35 @@ def to_orbital(orbit, t, q, Q=None, inertia=None):
     omega = cn.body_rate(np.asarray(q, dtype=np.float64), np.asarray(Q, dtype=np.float64), I)
     w_O = orbital_rate(orbit, t)
     return q_BO, omega - qt.rotate_inv(q_BO, w_O)
+
+
+#: rotation of 120 deg about (1, 1, 1): relabels the axes (x, y, z) -> (y, z, x)
+LVLH_RELABEL = np.array([0.5, 0.5, 0.5, 0.5])
+
+
+def lvlh_angles(q_orbital):
+    """Roll, pitch, yaw of an attitude relative to the orbital frame, as spacecraft practice
+    names them.
+
+    orbatt's orbital frame has ``o1`` radial (zenith), ``o2`` along-track, ``o3`` the orbit
+    normal (``DESIGN.md`` §1). **Roll** is the rotation about the along-track axis ``o2``,
+    **pitch** about the orbit normal ``o3`` (the in-plane libration of a gravity-gradient
+    satellite), **yaw** about the radial axis ``o1``, in the aerospace 3-2-1 sequence taken in
+    the relabelled axes ``(x', y', z') = (o2, o3, o1)``: first yaw about ``o1``, then pitch
+    about the new ``o3``, then roll about the new ``o2``. The body axes are relabelled the same
+    way, so body axes 1, 2, 3 along ``o1, o2, o3`` is zero roll, pitch and yaw. Positive
+    pitch turns about ``+o3`` (many LVLH conventions use ``-o3``: flip its sign to compare).
+
+    Parameters
+    ----------
+    q_orbital : array-like (..., 4)
+        Attitude of ``B`` relative to ``O`` (``x_O = q x_B q~``), scalar first.
+
+    Returns
+    -------
+    roll, pitch, yaw : ndarray (...)
+        rad; ranges and the singular ``pitch = +-pi/2`` as in
+        :func:`orbatt.quaternion.to_euler321`.
+    """
+    m = LVLH_RELABEL
+    return qt.to_euler321(qt.mul(qt.mul(qt.conj(m), q_orbital), m))

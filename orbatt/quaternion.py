@@ -17,27 +17,27 @@ Conventions (stated here once; ``DESIGN.md`` §1 is the reference)
   frame is ``p~ q``. ``q`` and ``-q`` are the same rotation.
 * Rotation matrices act on column vectors: ``R(q) x = q x q~`` (:func:`to_matrix`).
 * Euler angles: the paper's 3-1-3 sequence ``(phi, theta, psi)`` (eq. 12),
-  ``q = q_z(phi) q_x(theta) q_z(psi)``; ``0 <= theta <= pi``.
+  ``q = q_z(phi) q_x(theta) q_z(psi)``; ``0 <= theta <= pi``. The aerospace 3-2-1 sequence
+  ``q = q_z(yaw) q_y(pitch) q_x(roll)`` (:func:`to_euler321`).
 * scipy's :class:`~scipy.spatial.transform.Rotation` is **scalar last**; use
   :func:`to_scipy` / :func:`from_scipy`, which reorder explicitly.
 * Angles are in radians, plain floats (units are stripped at the API boundary).
 
 The scalar, allocation-free kernels used by the compiled integrators are in
-:mod:`orbatt.core.qalg` (re-exported here as ``kernels``); they follow the same conventions
-and are tested against the functions below.
+:mod:`orbatt.core.qalg`; they follow the same conventions and are tested against the
+functions below. This module does not import numba.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .core import qalg as kernels
 from .errors import InputError
 
 __all__ = [
     "as_quaternion", "mul", "conj", "norm", "dot", "normalize", "hadamard", "inv",
     "exp", "log", "rotate", "rotate_inv", "to_matrix", "from_matrix", "to_axis_angle",
     "from_axis_angle", "to_rotvec", "from_rotvec", "to_euler313", "from_euler313",
-    "to_scipy", "from_scipy", "pure", "vector", "angle_between", "canonical", "kernels",
+    "to_euler321", "to_scipy", "from_scipy", "pure", "vector", "angle_between", "canonical",
 ]
 
 
@@ -320,6 +320,44 @@ def to_euler313(q):
     psi = np.where((a == 0.0) | (b == 0.0), 0.0, sp - sm)
     wrap = lambda x: np.angle(np.exp(1j * x))  # noqa: E731  (-pi, pi]
     return wrap(phi), theta, wrap(psi)
+
+
+def to_euler321(q):
+    """3-2-1 (yaw, pitch, roll) angles of ``q``, returned in the order ``(roll, pitch, yaw)``.
+
+    The sequence: ``q = q_z(yaw) q_y(pitch) q_x(roll)`` with ``q_k(a) = (cos a/2, sin a/2 e_k)``.
+    For the attitude of ``B`` relative to a frame ``F`` (``x_F = q x_B q~``; ``F = O`` for
+    ``q_orbital``): turn the ``F`` axes by ``yaw`` about axis 3, then by ``pitch`` about the new
+    axis 2, then by ``roll`` about the new axis 1; the result is the ``B`` axes (intrinsic
+    z-y'-x'', the aerospace convention; scipy's ``Rotation.as_euler("ZYX")`` gives
+    ``(yaw, pitch, roll)``).
+
+    Parameters
+    ----------
+    q : array-like (..., 4)
+        Quaternions, scalar first (normalized here).
+
+    Returns
+    -------
+    roll, pitch, yaw : ndarray (...)
+        rad; ``roll, yaw`` in ``(-pi, pi]``, ``pitch`` in ``[-pi/2, pi/2]``. At the singular
+        ``pitch = +-pi/2`` only ``yaw -+ roll`` is defined: ``roll = 0`` is returned there
+        (when ``cos(pitch) < sqrt(eps)``), never NaN.
+    """
+    q = normalize(q)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)
+    r22 = 1.0 - 2.0 * (x * x + y * y)  # cos(roll) cos(pitch)
+    r20 = 2.0 * (w * y - x * z)  # sin(pitch)
+    cp = np.hypot(r21, r22)
+    pitch = np.arctan2(r20, cp)
+    lock = cp < np.sqrt(np.finfo(np.float64).eps)
+    roll = np.where(lock, 0.0, np.arctan2(r21, r22))
+    yaw_generic = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    # with roll = 0: R = Rz(yaw) Ry(pitch), R01 = -sin(yaw), R11 = cos(yaw)
+    yaw_lock = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
+    yaw = np.where(lock, yaw_lock, yaw_generic)
+    return roll, pitch, yaw
 
 
 def to_scipy(q):

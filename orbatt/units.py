@@ -5,6 +5,12 @@ Kernels work in plain floats. For dimensional problems the API converts every in
 kg km^2 s^-1, energies in kg km^2 s^-2, GM in km^3 s^-2) and attaches these units again on
 output. A *dimensionless* problem (inertia given as plain numbers, like the paper's
 Sects. 6.1-6.2) keeps plain numbers throughout and says so with unit ``"1"``.
+
+The unit strings orbatt writes (the ``units`` attribute of every Dataset variable) come from
+the one table here: :data:`CF_UNITS` (CF/UDUNITS spellings and the astropy unit each parses
+to), :data:`DIMENSIONAL_UNITS` / :data:`DIMENSIONLESS_UNITS` (the spelling of each quantity
+kind in either unit system); :func:`unit_string` and :func:`parse_unit` convert between
+strings and astropy units.
 """
 from __future__ import annotations
 
@@ -23,6 +29,42 @@ ENERGY = u.kg * u.km**2 / u.s**2
 RATE = u.rad / u.s
 GM = u.km**3 / u.s**2
 DIMENSIONLESS = u.dimensionless_unscaled
+
+#: CF/UDUNITS unit spellings orbatt writes, with the astropy unit each one parses to. Every
+#: key round-trips: ``astropy.units.Unit(key) == CF_UNITS[key]`` (tested), and UDUNITS-2
+#: accepts it.
+CF_UNITS = {
+    "1": u.dimensionless_unscaled,
+    "rad": u.rad,
+    "degree": u.deg,
+    "s": u.s,
+    "km": u.km,
+    "m": u.m,
+    "km s-1": u.km / u.s,
+    "m s-1": u.m / u.s,
+    "rad s-1": u.rad / u.s,
+    "degree s-1": u.deg / u.s,
+    "kg km2": u.kg * u.km**2,
+    "kg m2": u.kg * u.m**2,
+    "kg km2 s-1": u.kg * u.km**2 / u.s,
+    "kg m2 s-1": u.kg * u.m**2 / u.s,
+    "kg km2 s-2": u.kg * u.km**2 / u.s**2,
+    "J": u.J,
+    "km3 s-2": u.km**3 / u.s**2,
+}
+
+#: time units of a CF ``"<unit> since <date>"`` string
+CF_TIME_UNITS = {"seconds": u.s, "second": u.s, "secs": u.s, "sec": u.s, "s": u.s,
+                 "minutes": u.min, "minute": u.min, "min": u.min, "hours": u.h, "hour": u.h,
+                 "h": u.h, "days": u.day, "day": u.day, "d": u.day}
+
+#: CF spelling of the internal unit system by quantity kind (the ``units`` attribute orbatt
+#: writes for a dimensional problem)
+DIMENSIONAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s-1", "inertia": "kg km2",
+                     "momentum": "kg km2 s-1", "energy": "kg km2 s-2", "length": "km",
+                     "speed": "km s-1", "one": "1"}
+#: the same for a dimensionless problem: ``"1"`` everywhere except angles (``"rad"``)
+DIMENSIONLESS_UNITS = {k: ("rad" if k == "angle" else "1") for k in DIMENSIONAL_UNITS}
 
 
 def strip(value, unit, name, *, allow_plain=False):
@@ -61,3 +103,69 @@ def strip(value, unit, name, *, allow_plain=False):
     if not np.all(np.isfinite(out)):
         raise InputError(f"{name}: {value!r} is not finite; give finite values")
     return out
+
+
+def unit_string(unit) -> str:
+    """CF/UDUNITS spelling of an astropy unit.
+
+    Parameters
+    ----------
+    unit : astropy Unit or str
+        A unit (a string is parsed first, :func:`parse_unit`).
+
+    Returns
+    -------
+    str
+        The :data:`CF_UNITS` key whose unit is written the same way (``"kg km2 s-1"``), or
+        else the FITS spelling astropy gives (``"km2 kg s-3"``, also CF-compatible), or the
+        generic one. The result always parses back to an equal unit with
+        :func:`astropy.units.Unit`.
+    """
+    unit = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
+    if unit == u.dimensionless_unscaled:
+        return "1"
+    rep = unit.to_string()
+    for key, val in CF_UNITS.items():
+        if val.to_string() == rep:
+            return key
+    for fmt in ("fits", "generic"):
+        try:
+            s = unit.to_string(fmt)
+        except (ValueError, u.UnitsError):
+            continue
+        try:
+            if u.Unit(s) == unit:
+                return s
+        except ValueError:
+            continue
+    return unit.to_string()
+
+
+def parse_unit(s):
+    """astropy unit of a ``units`` attribute.
+
+    Parameters
+    ----------
+    s : str
+        A :data:`CF_UNITS` key, any string :class:`astropy.units.Unit` parses, or a CF time
+        reference ``"seconds since 2024-01-01T00:00:00Z"`` (then the unit before ``since``).
+
+    Raises
+    ------
+    InputError
+        The string is not a unit.
+    """
+    if isinstance(s, u.UnitBase):
+        return s
+    s = str(s).strip()
+    if s in CF_UNITS:
+        return CF_UNITS[s]
+    if " since " in s:
+        head = s.split(" since ", 1)[0].strip().lower()
+        if head in CF_TIME_UNITS:
+            return CF_TIME_UNITS[head]
+    try:
+        return u.Unit(s)
+    except ValueError:
+        raise InputError(f"units: {s!r} is not a unit astropy parses; use a CF spelling such as "
+                         f"'rad s-1' or 'kg km2'") from None

@@ -214,3 +214,22 @@ def test_planar_case_reduces_to_the_spin_orbit_equation(body):
     assert np.max(np.abs(omega3 - sol.y[1])) < 1e-9 * orbit.n
     # the spin is really driven: theta' changes by a fair fraction over 5 orbits
     assert np.ptp(sol.y[1]) > 0.1 * orbit.n
+
+
+# ------------------------------------------------------------------------------------------
+# roll, pitch, yaw about the orbital axes (moved from tests/test_dataset.py)
+# ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("axis,index", [((0, 1, 0), 0), ((0, 0, 1), 1), ((1, 0, 0), 2)])
+def test_lvlh_angles_name_the_orbital_axes(axis, index):
+    """Roll is about along-track o2, pitch about the orbit normal o3, yaw about radial o1."""
+    a = 0.3
+    angles = np.array(orb.lvlh_angles(qt.from_axis_angle(axis, a)))
+    expected = np.zeros(3)
+    expected[index] = a
+    assert np.allclose(angles, expected, atol=1e-15)
+
+
+def test_lvlh_angles_still_reachable_from_dataset():
+    from orbatt import dataset as D
+
+    assert D.lvlh_angles is orb.lvlh_angles

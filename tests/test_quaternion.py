@@ -173,3 +173,44 @@ def test_bad_input():
         qt.normalize([0, 0, 0, 0])
     with pytest.raises(InputError, match="zero vector"):
         qt.from_axis_angle([0, 0, 0], 1.0)
+
+
+# ------------------------------------------------------------------------------------------
+# 3-2-1 angles (moved from tests/test_dataset.py; also reachable as orbatt.dataset.to_euler321)
+# ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("axis,which", [((1, 0, 0), 0), ((0, 1, 0), 1), ((0, 0, 1), 2)])
+def test_euler321_ninety_degrees(axis, which):
+    q = qt.from_axis_angle(np.array(axis, float), np.pi / 2 if which != 1 else np.pi / 3)
+    angles = np.array(qt.to_euler321(q))
+    expect = np.zeros(3)
+    expect[which] = np.pi / 2 if which != 1 else np.pi / 3
+    assert np.allclose(angles, expect, atol=1e-15)
+
+
+def test_euler321_sequence_and_scipy():
+    rng = np.random.default_rng(5)
+    q = qt.normalize(rng.normal(size=(500, 4)))
+    roll, pitch, yaw = qt.to_euler321(q)
+    # q = q_z(yaw) q_y(pitch) q_x(roll)
+    rebuilt = qt.mul(qt.mul(qt.from_axis_angle([0, 0, 1.0], yaw), qt.from_axis_angle([0, 1.0, 0], pitch)),
+                     qt.from_axis_angle([1.0, 0, 0], roll))
+    assert np.all(qt.angle_between(rebuilt, q) < 1e-14)
+    ypr = qt.to_scipy(q).as_euler("ZYX")
+    assert np.allclose(np.stack([roll, pitch, yaw], -1), ypr[:, ::-1], atol=1e-13)
+    assert np.all(np.abs(pitch) <= np.pi / 2)
+
+
+@pytest.mark.parametrize("pitch", [np.pi / 2, -np.pi / 2])
+def test_euler321_gimbal_lock(pitch):
+    q = qt.from_scipy(Rotation.from_euler("ZYX", [0.7, pitch, 0.2]))
+    roll, p, yaw = qt.to_euler321(q)
+    assert np.isfinite([roll, p, yaw]).all() and roll == 0.0
+    assert abs(p - pitch) < 1e-7
+    rebuilt = qt.from_scipy(Rotation.from_euler("ZYX", [yaw, p, roll]))
+    assert qt.angle_between(rebuilt, q) < 1e-7
+
+
+def test_euler321_still_reachable_from_dataset():
+    from orbatt import dataset as D
+
+    assert D.to_euler321 is qt.to_euler321

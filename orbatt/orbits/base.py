@@ -9,6 +9,7 @@ from astropy import units as u
 
 from .. import quaternion as qt
 from .. import units as U
+from ..epoch import epoch_string, parse_epoch  # noqa: F401  (re-exported: the providers use them)
 from ..errors import InputError
 
 #: Earth's mass parameter (km^3 s^-2): astropy ``GM_earth`` (IAU 2015 nominal, 398600.4 km^3/s^2).
@@ -253,27 +254,3 @@ def check_periapsis(a, e, body_radius, central_body, stacklevel=3):
                       f"radius {body_radius:.6g} km); the point-mass orbit is still computed. Raise a or "
                       "lower e for a physical orbit, or pass body_radius=None to silence this check",
                       PeriapsisWarning, stacklevel=stacklevel)
-
-
-def parse_epoch(epoch):
-    """``None``, an astropy ``Time``, or a string astropy parses (taken as UTC)."""
-    if epoch is None:
-        return None
-    from astropy.time import Time
-
-    if isinstance(epoch, Time):
-        if epoch.shape != ():
-            raise InputError(f"epoch: expected one instant, got an array of shape {epoch.shape}")
-        return epoch
-    if isinstance(epoch, str):
-        try:
-            return Time(epoch, scale="utc")
-        except ValueError:
-            raise InputError(f"epoch: {epoch!r} is not a time astropy parses; write e.g. "
-                             "'2026-03-20T00:00:00' (UTC)") from None
-    raise InputError(f"epoch: expected an astropy Time or an ISO string, got {type(epoch).__name__}")
-
-
-def epoch_string(epoch):
-    """ISO 8601 UTC string of an epoch (for ``describe()``)."""
-    return epoch.utc.isot

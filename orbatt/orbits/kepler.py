@@ -9,9 +9,9 @@ import numpy as np
 from .. import units as U
 from ..core import kepler as kk
 from ..core import potentials as kp
+from ..epoch import epoch_string, parse_epoch
 from ..errors import InputError
-from .base import (R_EARTH, OrbitProvider, as_times, check_periapsis, elements_from_state, epoch_string,
-                   parse_epoch, resolve_gm)
+from .base import R_EARTH, OrbitProvider, as_times, check_periapsis, elements_from_state, resolve_gm
 
 
 def _angle(value, name):

@@ -13,8 +13,9 @@ from astropy import constants as const
 from .. import units as U
 from ..core import potentials as kp
 from ..core import sampled as ks
+from ..epoch import epoch_string
 from ..errors import InputError
-from .base import GM_EARTH, OrbitProvider, as_times, epoch_string
+from .base import GM_EARTH, OrbitProvider, as_times
 from .kepler import KeplerOrbit
 
 #: Earth's J2 (unnormalized; EGM2008 tide-free ``C20bar = -0.484165143790815e-3``,

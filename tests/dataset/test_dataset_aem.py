@@ -6,7 +6,7 @@ from astropy import units as u
 from astropy.time import Time
 
 import orbatt
-from orbatt import aem
+from orbatt.dataset import aem
 from orbatt import canonical as cn
 from orbatt import dataset as D
 from orbatt import quaternion as qt
@@ -198,3 +198,10 @@ def test_interpolation_degree_capped():
     meta = _meta(aem.write_aem(ds))
     assert meta["INTERPOLATION_METHOD"] == "LAGRANGE" and meta["INTERPOLATION_DEGREE"] == "2"
     assert "INTERPOLATION_METHOD" not in _meta(aem.write_aem(ds, interpolation_method=None))
+
+
+def test_old_module_name_still_works():
+    from orbatt.aem import read_aem, write_aem
+
+    assert read_aem is aem.read_aem and write_aem is aem.write_aem
+    assert orbatt.read_aem is aem.read_aem

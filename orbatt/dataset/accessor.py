@@ -1,0 +1,144 @@
+"""``ds.orbatt``: the stateless accessor of an orbatt Dataset - variables as astropy
+Quantities and unit conversion (with the CF spellings of :mod:`orbatt.units`), the epoch and
+absolute times, the stored scenario and integration metadata, export, and quick plots.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import xarray as xr
+from astropy import units as u
+
+from ..epoch import parse_epoch
+from ..errors import InputError
+from ..units import parse_unit, unit_string
+from . import plots
+from .aem import write_aem
+from .netcdf import write_netcdf
+
+__all__ = ["OrbattAccessor"]
+
+
+@xr.register_dataset_accessor("orbatt")
+class OrbattAccessor:
+    """``ds.orbatt``: units, time, I/O and plots for an orbatt Dataset (stateless)."""
+
+    def __init__(self, ds: xr.Dataset):
+        self._ds = ds
+
+    # units ------------------------------------------------------------------------------
+    def unit(self, name):
+        """astropy unit of variable ``name`` (from its ``units`` attribute)."""
+        if name not in self._ds.variables:
+            raise InputError(f"name: {name!r} is not a variable of this dataset; have "
+                             f"{sorted(self._ds.variables)}")
+        units = self._ds[name].attrs.get("units")
+        if units is None:
+            raise InputError(f"{name}: has no 'units' attribute")
+        return parse_unit(units)
+
+    def quantity(self, name):
+        """Values of variable ``name`` as an :class:`astropy.units.Quantity`.
+
+        Parameters
+        ----------
+        name : str
+            A data variable or numeric coordinate (``"omega"``, ``"time"``, ...).
+        """
+        unit = self.unit(name)
+        return np.asarray(self._ds[name].values) * unit
+
+    def to(self, name, unit) -> xr.DataArray:
+        """Variable ``name`` converted to ``unit``, as a DataArray with updated ``units``.
+
+        Parameters
+        ----------
+        name : str
+        unit : str or astropy Unit
+            E.g. ``"degree s-1"``, ``"deg/s"`` or ``u.deg / u.s`` for ``omega``.
+
+        Raises
+        ------
+        InputError
+            The units are not convertible (e.g. a dimensionless problem's ``"1"`` to
+            ``"deg/s"``).
+        """
+        target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
+        src = self.unit(name)
+        try:
+            factor = src.to(target)
+        except u.UnitConversionError:
+            raise InputError(f"{name}: cannot convert {self._ds[name].attrs['units']!r} to "
+                             f"{unit_string(target)!r}") from None
+        da = self._ds[name]
+        out = da.copy(data=np.asarray(da.values) * factor)
+        out.attrs["units"] = unit_string(target)
+        return out
+
+    def convert(self, **units) -> xr.Dataset:
+        """A copy of the Dataset with the named variables converted, e.g.
+        ``ds.orbatt.convert(omega="degree s-1", euler_313="degree")``."""
+        ds = self._ds.copy()
+        for name, unit in units.items():
+            ds[name] = self.to(name, unit)
+        return ds
+
+    # metadata ---------------------------------------------------------------------------
+    @property
+    def dimensionless(self) -> bool:
+        """True for a dimensionless problem (``time`` in units ``"1"``)."""
+        return self._ds["time"].attrs.get("units") == "1"
+
+    @property
+    def epoch(self):
+        """The epoch (``time = 0``) as an :class:`astropy.time.Time` (UTC), or None."""
+        s = self._ds.attrs.get("epoch")
+        return parse_epoch(str(s)) if s else None
+
+    def times(self):
+        """Absolute times (:class:`astropy.time.Time`) if there is an epoch, else the ``time``
+        Quantity."""
+        ep = self.epoch
+        tq = self.quantity("time")
+        return tq if ep is None else ep + tq
+
+    @property
+    def scenario(self):
+        """The scenario's TOML text, or None."""
+        return self._ds.attrs.get("scenario")
+
+    @property
+    def settings(self) -> dict:
+        """The integration method's settings (parsed from ``method_settings``)."""
+        return json.loads(self._ds.attrs.get("method_settings", "{}"))
+
+    @property
+    def stats(self) -> dict:
+        """Integration statistics (parsed from ``integration_stats``)."""
+        return json.loads(self._ds.attrs.get("integration_stats", "{}"))
+
+    # I/O --------------------------------------------------------------------------------
+    def to_netcdf(self, path, **kwargs):
+        """Write to NetCDF (:func:`write_netcdf`; ``append=True`` adds samples)."""
+        write_netcdf(self._ds, path, **kwargs)
+
+    def to_aem(self, path, **kwargs):
+        """Write ``q`` as a CCSDS AEM (:func:`orbatt.dataset.aem.write_aem`)."""
+        return write_aem(self._ds, path, **kwargs)
+
+    # plots (orbatt.dataset.plots) --------------------------------------------------------
+    def plot_state(self, case=None, fig=None):
+        """The paper's figure layout: ``q`` (left) and ``Q`` (right) against time
+        (:func:`orbatt.dataset.plots.plot_state`). Returns the matplotlib Figure."""
+        return plots.plot_state(self._ds, case=case, fig=fig)
+
+    def plot_attitude(self, case=None, unit="degree", fig=None):
+        """Euler angles against time (:func:`orbatt.dataset.plots.plot_attitude`). Returns the
+        Figure."""
+        return plots.plot_attitude(self._ds, case=case, unit=unit, fig=fig)
+
+    def plot_drift(self, case=None, fig=None):
+        """Energy and constraint drift on log axes (:func:`orbatt.dataset.plots.plot_drift`).
+        Returns the Figure."""
+        return plots.plot_drift(self._ds, case=case, fig=fig)

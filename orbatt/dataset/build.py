@@ -1,0 +1,331 @@
+"""Building the result Dataset of a propagation: :func:`to_dataset` (layout in
+:mod:`orbatt.dataset`), its global attributes (:func:`global_attrs`, shared with sweeps) and
+the names and constants of the layout.
+
+Every derived variable is computed here from the trajectory with :mod:`orbatt.canonical`,
+:mod:`orbatt.quaternion`, :mod:`orbatt.orbital` and the potential's ``evaluate``; nothing is
+integrated. Units: the spellings of :data:`orbatt.units.DIMENSIONAL_UNITS` (kg, km, s, rad) or
+:data:`orbatt.units.DIMENSIONLESS_UNITS`.
+"""
+from __future__ import annotations
+
+import json
+from datetime import datetime, timezone
+
+import numpy as np
+import xarray as xr
+from astropy import units as u
+
+from .. import canonical as cn
+from .. import quaternion as qt
+from ..body import RigidBody
+from ..epoch import iso_epoch
+from ..errors import InputError
+from ..orbital import lvlh_angles
+from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
+from ..version import __version__
+
+__all__ = [
+    "to_dataset", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
+    "QUATERNION_ORDER", "QUAT_INDEX", "QUAT_LABELS", "AXIS_INDEX", "AXIS_LABELS", "EULER_313_LABELS",
+    "EULER_321_LABELS", "LABEL_COORDS", "CONVENTIONS", "REFERENCE", "FRAMES",
+]
+
+#: Order of the ``quat`` dimension, written on every quaternion variable.
+QUATERNION_ORDER = "w x y z"
+QUAT_INDEX = np.array([0, 1, 2, 3])
+QUAT_LABELS = ["w", "x", "y", "z"]
+AXIS_INDEX = np.array([1, 2, 3])
+AXIS_LABELS = ["x", "y", "z"]
+EULER_313_LABELS = ["phi", "theta", "psi"]
+EULER_321_LABELS = ["roll", "pitch", "yaw"]
+#: the string coordinates beside the numeric dimension coordinates
+LABEL_COORDS = ("quat_label", "axis_label", "euler_313_label", "euler_321_label")
+
+CONVENTIONS = "CF-1.11"
+REFERENCE = ("Arribas, M., Elipe, A., Palacios, M. (2006): Quaternions and the rotation of a "
+             "rigid body. Celestial Mechanics and Dynamical Astronomy 96, 239-251")
+FRAMES = ("S: inertial (space) frame; B: body principal axes; O: orbital frame (o1 radial "
+          "outwards, o3 along r x v, o2 = o3 x o1). 'X relative to Y' quaternion p: x_Y = p x_X p~ "
+          "(Hamilton product, scalar first).")
+
+
+def to_json(obj) -> str:
+    """JSON text of ``obj`` (keys sorted; numpy scalars and arrays, Quantities and Times
+    written as numbers, lists and strings; ``None`` as ``{}``)."""
+    def default(x):
+        if isinstance(x, np.generic):
+            return x.item()
+        if isinstance(x, np.ndarray):
+            return x.tolist()
+        if isinstance(x, u.Quantity):
+            return str(x)
+        if hasattr(x, "isot"):
+            return x.isot
+        return str(x)
+
+    return json.dumps(obj if obj is not None else {}, default=default, sort_keys=True)
+
+
+def utc_now() -> str:
+    """The current time, ISO 8601 UTC to the second (``date_created``, ``history``)."""
+    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def orbatt_version() -> str:
+    """orbatt's version string (the ``orbatt_version`` attribute)."""
+    return __version__
+
+
+def cf_variable(dims, data, units, long_name, **extra):
+    """An :class:`xarray.Variable` with the CF ``units`` and ``long_name`` attributes (and any
+    ``extra`` ones)."""
+    attrs = {"units": units, "long_name": long_name}
+    attrs.update(extra)
+    return xr.Variable(dims, data, attrs)
+
+
+def _quat_attrs(frames, maps):
+    return {"quaternion_order": QUATERNION_ORDER, "frames": frames, "convention": maps}
+
+
+def _plain(x, unit):
+    """Float64 array of ``x`` in ``unit`` (Quantities are converted, plain values kept)."""
+    if isinstance(x, u.Quantity):
+        return np.asarray(x.to_value(unit), dtype=np.float64)
+    return np.asarray(x, dtype=np.float64)
+
+
+def _describe(obj):
+    """``obj.describe()``, or ``{"kind": <class name>}`` for an object without one."""
+    return obj.describe() if hasattr(obj, "describe") else {"kind": type(obj).__name__}
+
+
+def global_attrs(*, method, settings, stats, potential, dimensionless, complete=True, orbit=None,
+                 epoch=None, scenario_text=None, title=None, action=None, **extra) -> dict:
+    """The global attributes of an orbatt result (a run's or a sweep's Dataset).
+
+    One place for what every result carries: :func:`to_dataset` and the sweep runner call it.
+
+    Parameters
+    ----------
+    All keyword-only.
+
+    method : str
+        Integration method name (``method``).
+    settings : dict
+        Method settings, written as JSON text (``method_settings``).
+    stats : dict or str
+        Integration statistics (``integration_stats``): a dict is written as JSON text, a
+        string is kept as is (already JSON).
+    potential : Potential or dict
+        The potential (its ``describe()`` is written as JSON text, ``potential``) or that
+        description itself.
+    dimensionless : bool
+        The unit system (``unit_system``: ``"kg km s rad"`` or ``"dimensionless (angles in
+        rad)"``).
+    complete : bool
+        The integration reached its end (``integration_complete``, int8 1 or 0).
+    orbit : OrbitProvider or dict, optional
+        Its ``describe()`` (or the dict) as JSON text (``orbit``); left out when None.
+    epoch : astropy.time.Time or str, optional
+        ``time = 0`` (``epoch``, ISO 8601 UTC with ns digits, :func:`orbatt.epoch.iso_epoch`);
+        left out when None.
+    scenario_text : str, optional
+        The scenario's TOML text, verbatim (``scenario``); left out when None.
+    title : str, optional
+        Default: ``"orbatt attitude propagation (<potential kind>)"``.
+    action : str, optional
+        What made the result, for ``history`` (``"<now> orbatt <version>: <action>"``);
+        default ``"propagated with <method>"``.
+    **extra
+        Further attributes (e.g. a sweep's ``sweep_*`` description), added after the ones
+        above and before ``date_created`` and ``history``; they override a standard one of the
+        same name.
+
+    Returns
+    -------
+    dict
+        ``Conventions``, ``title``, ``source``, ``references``, ``orbatt_version``, ``method``,
+        ``method_settings``, ``integration_stats``, ``integration_complete``, ``potential``,
+        ``unit_system``, ``frames``, ``quaternion_order``, then ``orbit``, ``epoch``,
+        ``scenario`` where given, ``extra``, ``date_created`` and ``history``.
+    """
+    pot_desc = potential if isinstance(potential, dict) else _describe(potential)
+    version = orbatt_version()
+    attrs = {
+        "Conventions": CONVENTIONS,
+        "title": title or f"orbatt attitude propagation ({pot_desc.get('kind', 'unknown potential')})",
+        "source": f"orbatt {version}",
+        "references": REFERENCE,
+        "orbatt_version": version,
+        "method": str(method),
+        "method_settings": to_json(settings),
+        "integration_stats": stats if isinstance(stats, str) else to_json(stats),
+        "integration_complete": np.int8(1 if complete else 0),
+        "potential": to_json(pot_desc),
+        "unit_system": "dimensionless (angles in rad)" if dimensionless else "kg km s rad",
+        "frames": FRAMES,
+        "quaternion_order": QUATERNION_ORDER,
+    }
+    if orbit is not None:
+        attrs["orbit"] = to_json(orbit if isinstance(orbit, dict) else _describe(orbit))
+    epoch_s = iso_epoch(epoch)
+    if epoch_s:
+        attrs["epoch"] = epoch_s
+    if scenario_text is not None:
+        attrs["scenario"] = str(scenario_text)
+    attrs.update(extra)
+    now = utc_now()
+    attrs["date_created"] = now
+    attrs["history"] = f"{now} orbatt {version}: {action or f'propagated with {method}'}"
+    return attrs
+
+
+def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.Dataset:
+    """The Dataset of a propagation (layout in :mod:`orbatt.dataset`).
+
+    Parameters
+    ----------
+    trajectory : orbatt.trajectory.Trajectory
+        What :func:`orbatt.propagate` returned: ``t (N,)`` and ``q, Q`` of shape ``(N, 4)`` (or
+        ``(E, N, 4)`` for an ensemble) in the body's internal units.
+    scenario_text : str, optional
+        The scenario's TOML text; stored verbatim as the global attribute ``scenario``.
+    epoch : astropy.time.Time or str, optional
+        The instant ``time = 0``. Default: the orbit provider's ``epoch`` (if any). Stored as an
+        ISO 8601 UTC string (global attribute ``epoch``); dimensionless problems have none.
+    title : str, optional
+        Global ``title`` attribute (default: a sentence naming the potential).
+
+    Returns
+    -------
+    xarray.Dataset
+        Every derived quantity is computed with :mod:`orbatt.canonical`,
+        :mod:`orbatt.quaternion` and ``potential.evaluate``; nothing is integrated here.
+    """
+    tr = trajectory
+    body = tr.body
+    dimless = bool(body.dimensionless)
+    U = DIMENSIONLESS_UNITS if dimless else DIMENSIONAL_UNITS
+    t = np.ascontiguousarray(tr.t, dtype=np.float64)
+    q = np.asarray(tr.q, dtype=np.float64)
+    Q = np.asarray(tr.Q, dtype=np.float64)
+    ens = q.ndim == 3
+    if q.shape != Q.shape or q.shape[-1] != 4 or q.shape[-2] != t.shape[0] or q.ndim not in (2, 3):
+        raise InputError(f"trajectory: q {q.shape}, Q {Q.shape} and t {t.shape} do not fit "
+                         "(expected q, Q of shape (N, 4) or (E, N, 4) and t of shape (N,))")
+    inertia = np.asarray(tr.inertia if tr.inertia is not None else body.inertia_value, dtype=np.float64)
+    if ens:
+        inertia = np.broadcast_to(inertia, (q.shape[0], 3)).copy()
+    lead = ("case",) if ens else ()
+    inert_b = inertia[:, None, :] if ens else inertia  # broadcast against (E, N, 3)
+
+    if dimless and epoch is not None:
+        raise InputError("epoch: a dimensionless problem has no calendar epoch; leave it out")
+    orbit = tr.orbit
+    if epoch is None and orbit is not None and not dimless:
+        epoch = getattr(orbit, "epoch", None)
+    epoch_s = None if dimless else iso_epoch(epoch)
+
+    # --- state and derived quantities (orbatt.canonical / quaternion / potential) ---
+    g = cn.body_momentum(q, Q)
+    omega = cn.body_rate(q, Q, inert_b)
+    G = cn.space_momentum(q, Q)
+    T = cn.kinetic_energy(q, Q, inert_b)
+    norm_err, qQ = cn.constraint_residuals(q, Q)
+    if ens:
+        Upot = np.stack([_potential_energy(tr.potential, _member_body(body, inertia[e]), t, q[e])
+                         for e in range(q.shape[0])])
+    else:
+        Upot = _potential_energy(tr.potential, body, t, q)
+    phi, theta, psi = qt.to_euler313(q)
+    e313 = np.stack([phi, theta, psi], axis=-1)
+
+    tdims = lead + ("time",)
+    time_attrs = {"units": U["time"], "long_name": ("time since the epoch" if epoch_s else
+                                                      "dimensionless time" if dimless else
+                                                      "time since the start")}
+    if epoch_s:
+        time_attrs.update(standard_name="time", axis="T")
+    coords = {
+        "time": xr.Variable(("time",), t, time_attrs),
+        "quat": cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
+                     quaternion_order=QUATERNION_ORDER),
+        "quat_label": xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
+        "axis": cf_variable(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
+        "axis_label": xr.Variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
+        "euler_313_angle": cf_variable(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
+        "euler_313_label": xr.Variable(("euler_313_angle",), np.array(EULER_313_LABELS),
+                                       {"long_name": "3-1-3 Euler angle name"}),
+    }
+    if ens:
+        coords["case"] = cf_variable(("case",), np.arange(q.shape[0]), "1", "ensemble member")
+
+    qv = tdims + ("quat",)
+    vv = tdims + ("axis",)
+    data = {
+        "q": cf_variable(qv, q, "1", "attitude quaternion of the body",
+                  **_quat_attrs("B relative to S", "x_S = q x_B q~ (maps body to space components)")),
+        "Q": cf_variable(qv, Q, U["momentum"], "conjugate momentum of q (paper eq. 5: Q = 2 q g)",
+                  quaternion_order=QUATERNION_ORDER, conjugate_to="q (B relative to S)",
+                  convention="g = 1/2 Im(q~ Q) (body), G = 1/2 Im(Q q~) (space)"),
+        "omega": cf_variable(vv, omega, U["rate"], "angular velocity of the body (body components)", frame="B"),
+        "g": cf_variable(vv, g, U["momentum"], "angular momentum (body components)", frame="B"),
+        "G": cf_variable(vv, G, U["momentum"], "angular momentum (space components)", frame="S"),
+        "energy": cf_variable(tdims, T + Upot, U["energy"], "total energy H = T + U"),
+        "kinetic_energy": cf_variable(tdims, T, U["energy"], "kinetic energy T (paper eq. 6)"),
+        "potential_energy": cf_variable(tdims, Upot, U["energy"], "potential energy U"),
+        "q_norm_error": cf_variable(tdims, norm_err, "1", "constraint residual |q| - 1"),
+        "qQ": cf_variable(tdims, qQ, U["momentum"], "constraint residual q.Q (R4 dot product)"),
+        "euler_313": cf_variable(tdims + ("euler_313_angle",), e313, "rad",
+                          "3-1-3 Euler angles (phi, theta, psi) of q (paper eq. 12): "
+                          "q = q_z(phi) q_x(theta) q_z(psi)", frames="B relative to S"),
+        "inertia": cf_variable(lead + ("axis",), inertia, U["inertia"], "principal moments of inertia (I1, I2, I3)",
+                        frame="B"),
+    }
+
+    if orbit is not None:
+        r = _plain(orbit.radius(t), u.km)
+        p = _plain(orbit.orbital_quaternion(t), u.one)
+        nu = _plain(orbit.true_anomaly(t), u.rad)
+        pos, vel = orbit.state(t)
+        pos = _plain(pos, u.km)
+        vel = _plain(vel, u.km / u.s)
+        q_orb = qt.mul(qt.conj(p), q)
+        roll, pitch, yaw = lvlh_angles(q_orb)
+        coords["euler_321_angle"] = cf_variable(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
+        coords["euler_321_label"] = xr.Variable(("euler_321_angle",), np.array(EULER_321_LABELS),
+                                                {"long_name": "3-2-1 Euler angle name"})
+        data.update({
+            "r": cf_variable(("time",), r, "km", "orbit radius"),
+            "p": cf_variable(("time", "quat"), p, "1", "orbital quaternion",
+                      **_quat_attrs("O relative to S", "x_S = p x_O p~ (maps orbital to space components)")),
+            "true_anomaly": cf_variable(("time",), nu, "rad", "true anomaly"),
+            "position": cf_variable(("time", "axis"), pos, "km", "position of the body's centre of mass", frame="S"),
+            "velocity": cf_variable(("time", "axis"), vel, "km s-1", "velocity of the body's centre of mass", frame="S"),
+            "q_orbital": cf_variable(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
+                              **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
+            "euler_321": cf_variable(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
+                              "roll (about along-track o2), pitch (about orbit normal o3), yaw (about radial o1) "
+                              "of q_orbital: q_orbital = m q_yaw,o1 q_pitch,o3 q_roll,o2 m~ (3-2-1 sequence in "
+                              "the axes (o2, o3, o1))", frames="B relative to O",
+                              body_axes="body axes 2, 3, 1 nominally along o2, o3, o1"),
+        })
+
+    attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
+                         dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
+                         scenario_text=scenario_text, title=title)
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _member_body(body, inertia):
+    """The body of an ensemble member with principal moments ``inertia`` (internal unit)."""
+    if np.array_equal(inertia, body.inertia_value):
+        return body
+    return RigidBody(inertia.tolist() if body.dimensionless else inertia * body.inertia_unit)
+
+
+def _potential_energy(potential, body, t, q):
+    U, _, _ = potential.evaluate(body, t, q)
+    return np.asarray(U, dtype=np.float64).reshape(t.shape)

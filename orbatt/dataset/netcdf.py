@@ -1,0 +1,408 @@
+"""NetCDF export and import of orbatt Datasets: :func:`write_netcdf` (whole, or appended as a
+run goes; :class:`NetCDFWriter`), :func:`open_dataset`, and the file form
+(:func:`encode` / :func:`decode`, :func:`encoding`).
+
+float64 is stored losslessly (zlib + shuffle), chunked along an unlimited ``time`` dimension.
+In the file the time coordinate of a problem with an epoch has the CF encoding
+``units = "seconds since <epoch>"``, ``calendar = "standard"`` (plain
+:func:`xarray.open_dataset` decodes it to datetimes); :func:`open_dataset` gives back the
+in-memory form (``units = "s"``) bit for bit. Two engines write the same netCDF-4/HDF5 layout:
+netCDF4 and h5netcdf (:func:`check_engine`).
+"""
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import signal
+import stat
+import sys
+import threading
+from contextlib import contextmanager
+
+import numpy as np
+import xarray as xr
+
+from ..errors import InputError
+from .build import LABEL_COORDS, orbatt_version, utc_now
+
+__all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
+           "TEMP_PREFIX", "DEFAULT_CHUNK_TIME"]
+
+DEFAULT_CHUNK_TIME = 16384
+#: name prefix of the temporary file written beside the target before the rename
+TEMP_PREFIX = ".tmp-"
+
+
+def _default_engine():
+    try:
+        import netCDF4  # noqa: F401
+
+        return "netcdf4"
+    except ImportError:
+        pass
+    try:
+        import h5netcdf  # noqa: F401
+        import h5py  # noqa: F401
+
+        return "h5netcdf"
+    except ImportError:
+        raise InputError("NetCDF: neither netCDF4 nor h5netcdf (with h5py) is installed; "
+                         "pip install 'orbatt[io]'") from None
+
+
+def check_engine(engine):
+    """The NetCDF library to use: ``"netcdf4"`` or ``"h5netcdf"`` (``None``: netCDF4 if
+    installed, else h5netcdf); raises :class:`InputError` for another name or neither
+    installed."""
+    engine = _default_engine() if engine is None else str(engine).lower()
+    if engine not in ("netcdf4", "h5netcdf"):
+        raise InputError(f"engine: {engine!r} is not 'netcdf4' or 'h5netcdf' (orbatt files are "
+                         "netCDF-4/HDF5: chunked, compressed and appendable)")
+    return engine
+
+
+def encode(ds: xr.Dataset) -> xr.Dataset:
+    """The file form: CF time reference where there is an epoch, no stale encodings."""
+    out = ds.drop_encoding()
+    epoch = ds.attrs.get("epoch")
+    if epoch and "time" in ds.coords and ds["time"].attrs.get("units") == "s":
+        attrs = dict(ds["time"].attrs)
+        attrs["units"] = f"seconds since {epoch}"
+        attrs["calendar"] = "standard"
+        out = out.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs))
+    return out
+
+
+def decode(ds: xr.Dataset) -> xr.Dataset:
+    """Inverse of :func:`encode` on a dataset opened with ``decode_times=False``."""
+    if "time" in ds.coords:
+        units = str(ds["time"].attrs.get("units", ""))
+        if " since " in units:
+            head, ref = (s.strip() for s in units.split(" since ", 1))
+            if head.lower() not in ("seconds", "second", "secs", "sec", "s"):
+                raise InputError(f"time: units {units!r}; orbatt files use 'seconds since <epoch>'")
+            attrs = dict(ds["time"].attrs)
+            attrs["units"] = "s"
+            attrs.pop("calendar", None)
+            ds = ds.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs,
+                                                   encoding=ds["time"].encoding))
+            if "epoch" not in ds.attrs:
+                ds.attrs["epoch"] = ref
+    for name in LABEL_COORDS:
+        if name in ds.coords and ds[name].dtype.kind in "OS":
+            vals = np.array([v.decode() if isinstance(v, bytes) else str(v) for v in ds[name].values])
+            ds = ds.assign_coords({name: xr.Variable(ds[name].dims, vals, ds[name].attrs)})
+    return ds
+
+
+def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
+    """Per-variable NetCDF encoding: no fill values, labels as char arrays, chunks of
+    ``chunk_time`` samples along ``time`` (one ``case`` per chunk), zlib + shuffle on floats
+    when ``complevel > 0`` (lossless)."""
+    enc = {}
+    for name, var in ds.variables.items():
+        e = {}
+        if var.dtype.kind in "fiu":
+            e["_FillValue"] = None
+        if var.dtype.kind in "US":
+            e["dtype"] = "S1"
+        if "time" in var.dims:
+            e["chunksizes"] = tuple(chunk_time if d == "time" else (1 if d == "case" else n)
+                                    for d, n in zip(var.dims, var.shape))
+            if var.dtype.kind == "f" and complevel > 0:
+                e.update(zlib=True, complevel=int(complevel), shuffle=True)
+        enc[name] = e
+    return enc
+
+
+def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1,
+                 chunk_time=DEFAULT_CHUNK_TIME):
+    """Write an orbatt Dataset to a netCDF-4 file, or append its samples to one.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An orbatt Dataset (:func:`to_dataset`) or a slice of one along ``time``.
+    path : str or os.PathLike
+    engine : {"netcdf4", "h5netcdf"}, optional
+        Library used; default netCDF4 if installed, else h5netcdf (needs h5py). Both write the
+        same netCDF-4/HDF5 layout and can append to each other's files.
+    append : bool
+        False (default): create or overwrite ``path``. True: add the samples of ``ds`` after
+        those in ``path`` (created if missing). The variables and their non-time coordinates
+        must match; a first sample at the file's last time (as when a run is propagated
+        segment by segment) is dropped; an earlier one is refused. ``integration_stats``
+        numbers are summed, ``integration_complete`` is the AND of both, and ``history`` and
+        ``date_modified`` record the append.
+    complevel : int
+        zlib level (0 = no compression, 1 default: fast, lossless; shuffle filter on).
+    chunk_time : int
+        Samples per chunk along ``time`` (HDF5 chunk shapes are ``(chunk_time, 4)`` etc.).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        After the write, when Ctrl-C came during it: SIGINT is held back while the file is
+        written (in the main thread), so the file is complete either way.
+
+    Notes
+    -----
+    ``time`` is an unlimited dimension. Values are stored as float64 without fill values:
+    reading gives them back bit for bit.
+
+    A new file (``append=False``, or ``append=True`` on a missing file) is written to a
+    temporary file beside ``path`` (name starting with ``.tmp-``), flushed to disk and renamed
+    over ``path``: a kill during the write leaves the earlier file (and possibly a stray
+    ``.tmp-`` file), never a partial one under ``path``. An append writes into ``path`` in place.
+    Use :func:`orbatt.dataset.paths.check_output_path` first to refuse paths that are not
+    orbatt results.
+    """
+    engine = check_engine(engine)
+    path = os.fspath(path)
+    with _interrupts_deferred(path) as interrupted:
+        if append and os.path.exists(path):
+            _append(ds, path, engine)
+        else:
+            enc_ds = encode(ds)
+            _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
+                             encoding=encoding(enc_ds, complevel, chunk_time))
+    if interrupted:
+        raise KeyboardInterrupt
+
+
+def _write_replacing(ds: xr.Dataset, path, **to_netcdf):
+    """``ds.to_netcdf`` into a new temporary file beside ``path`` (``.tmp-<name>.<pid>.<hex>``),
+    flushed to disk, then renamed over ``path``: ``path`` is the earlier file or the complete new
+    one, never a partial one. The temporary file is removed on any exception; it keeps the mode
+    of the file it replaces (a new file gets the default mode of the umask)."""
+    folder, name = os.path.split(os.path.abspath(path))
+    tmp = os.path.join(folder, f"{TEMP_PREFIX}{name}.{os.getpid()}.{secrets.token_hex(4)}")
+    os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+    try:
+        ds.to_netcdf(tmp, **to_netcdf)
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:
+            os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))
+        except FileNotFoundError:
+            pass
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    try:  # the rename itself to disk
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError:
+        pass
+
+
+@contextmanager
+def _interrupts_deferred(path):
+    """Hold Ctrl-C (SIGINT) back while a file is written; yield a list that is non-empty when
+    one came.
+
+    A ``KeyboardInterrupt`` raised inside the NetCDF libraries can leave xarray's backend lock
+    held (a deadlock in ``store.close()``) and a partial file; deferred, the write finishes
+    (``write_netcdf`` then raises ``KeyboardInterrupt`` itself). Only in the main thread, and
+    only when SIGINT has Python's default handler; elsewhere nothing changes.
+    """
+    hits = []
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield hits
+        return
+
+    def hold(signum, frame):
+        if not hits:
+            print(f"orbatt: interrupt: finishing the write of {path} first", file=sys.stderr, flush=True)
+        hits.append(signum)
+
+    signal.signal(signal.SIGINT, hold)
+    try:
+        yield hits
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _append(ds: xr.Dataset, path, engine):
+    piece = encode(ds)
+    t_new = piece["time"].values
+    if engine == "netcdf4":
+        import netCDF4
+
+        f = netCDF4.Dataset(path, "a")
+        f.set_auto_maskandscale(False)
+    else:
+        import h5netcdf
+
+        f = h5netcdf.File(path, "a")
+    try:
+        names_file = set(f.variables)
+        names_piece = set(piece.variables)
+        if names_file != names_piece:
+            raise InputError(f"append: {path} has variables {sorted(names_file - names_piece)} the new "
+                             f"samples lack, and they have {sorted(names_piece - names_file)} it lacks")
+        tvar = f.variables["time"]
+        units_file = tvar.attrs["units"] if engine == "h5netcdf" else tvar.getncattr("units")
+        if units_file != piece["time"].attrs["units"]:
+            raise InputError(f"append: time units differ ({units_file!r} in {path}, "
+                             f"{piece['time'].attrs['units']!r} new); different epochs cannot be appended")
+        n0 = f.dimensions["time"].size if engine == "h5netcdf" else len(f.dimensions["time"])
+        start = 0
+        if n0 > 0:
+            last = float(np.asarray(tvar[n0 - 1]))
+            if t_new.size and t_new[0] == last:
+                start = 1
+            if t_new.size > start and t_new[start] <= last:
+                raise InputError(f"append: new samples start at time {t_new[start]!r}, not after the "
+                                 f"file's last time {last!r}")
+        n = t_new.size - start
+        if n <= 0:
+            return
+        if engine == "h5netcdf":
+            f.resize_dimension("time", n0 + n)
+        for name, var in piece.variables.items():
+            if "time" not in var.dims:
+                continue
+            ax = var.dims.index("time")
+            idx_new = [slice(None)] * var.ndim
+            idx_new[ax] = slice(start, None)
+            idx_file = [slice(None)] * var.ndim
+            idx_file[ax] = slice(n0, n0 + n)
+            f.variables[name][tuple(idx_file)] = np.asarray(var.values)[tuple(idx_new)]
+        # global attributes
+        get = (lambda k: f.attrs.get(k)) if engine == "h5netcdf" else (
+            lambda k: f.getncattr(k) if k in f.ncattrs() else None)
+
+        def put(k, v):
+            if engine == "h5netcdf":
+                f.attrs[k] = v
+            else:
+                f.setncattr(k, v)
+
+        stats = _sum_stats(get("integration_stats"), ds.attrs.get("integration_stats"))
+        if stats is not None:
+            put("integration_stats", stats)
+        comp = get("integration_complete")
+        if comp is not None:
+            put("integration_complete", np.int8(int(np.asarray(comp)) and int(ds.attrs.get("integration_complete", 1))))
+        now = utc_now()
+        put("date_modified", now)
+        hist = get("history") or ""
+        put("history", f"{hist}\n{now} orbatt {orbatt_version()}: appended {n} samples".lstrip("\n"))
+    finally:
+        f.close()
+
+
+def _sum_stats(a, b):
+    """Sum the numbers of two JSON stats texts (keys of either kept)."""
+    if a is None or b is None:
+        return a
+    try:
+        da, db = json.loads(str(a)), json.loads(str(b))
+    except ValueError:
+        return a
+    out = dict(da)
+    for k, v in db.items():
+        if k in out and isinstance(out[k], (int, float)) and isinstance(v, (int, float)) \
+                and not isinstance(v, bool):
+            out[k] = out[k] + v
+        elif k not in out:
+            out[k] = v
+    return json.dumps(out, sort_keys=True)
+
+
+class NetCDFWriter:
+    """Write a long run to a netCDF file piece by piece, as it goes.
+
+    Each :meth:`append` leaves a complete, readable file behind (the file is opened and closed
+    per piece), so an interrupted run keeps what was written.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Created (or overwritten) by the first :meth:`append`.
+    engine, complevel, chunk_time
+        As in :func:`write_netcdf`.
+
+    Examples
+    --------
+    >>> with NetCDFWriter("run.nc") as w:                     # doctest: +SKIP
+    ...     for piece in segments:                            # Trajectory pieces
+    ...         w.append(to_dataset(piece, scenario_text=text))
+    """
+
+    def __init__(self, path, *, engine=None, complevel=1, chunk_time=DEFAULT_CHUNK_TIME):
+        self.path = os.fspath(path)
+        self.engine = check_engine(engine)
+        self.complevel = complevel
+        self.chunk_time = chunk_time
+        self._started = False
+        self.samples = 0
+
+    def append(self, ds: xr.Dataset):
+        """Add the samples of ``ds`` (an orbatt Dataset) at the end of the file."""
+        if not self._started:
+            write_netcdf(ds, self.path, engine=self.engine, complevel=self.complevel,
+                         chunk_time=self.chunk_time)
+            self._started = True
+        else:
+            write_netcdf(ds, self.path, engine=self.engine, append=True)
+        self.samples = _time_length(self.path, self.engine)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def _time_length(path, engine):
+    if engine == "netcdf4":
+        import netCDF4
+
+        with netCDF4.Dataset(path) as f:
+            return len(f.dimensions["time"])
+    import h5netcdf
+
+    with h5netcdf.File(path, "r") as f:
+        return f.dimensions["time"].size
+
+
+def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
+    """Open an orbatt NetCDF file, giving back the Dataset :func:`to_dataset` built.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    engine : {"netcdf4", "h5netcdf"}, optional
+        Default as in :func:`write_netcdf`.
+    load : bool
+        Read all values into memory now (default: lazily, as :func:`xarray.open_dataset`).
+    **kwargs
+        Passed to :func:`xarray.open_dataset` (e.g. ``chunks`` for dask).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``time`` as float seconds since the epoch (``units = "s"``; the CF ``"seconds since"``
+        of the file is undone), label coordinates as strings, every value bit for bit as
+        written.
+    """
+    engine = check_engine(engine)
+    kwargs.setdefault("decode_times", False)
+    kwargs.setdefault("decode_timedelta", False)
+    ds = xr.open_dataset(os.fspath(path), engine=engine, **kwargs)
+    ds = decode(ds)
+    return ds.load() if load else ds

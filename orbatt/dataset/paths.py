@@ -1,0 +1,141 @@
+"""Output paths of results, checked before a run computes anything: file names derived from a
+scenario's ``name`` (:func:`file_name`), and the output file itself (:func:`check_output_path`:
+a writable folder, and no file there but an earlier orbatt result, :func:`is_orbatt_result`).
+"""
+from __future__ import annotations
+
+import os
+import secrets
+from pathlib import Path
+
+from ..errors import InputError
+from .netcdf import TEMP_PREFIX, check_engine
+
+__all__ = ["file_name", "is_orbatt_result", "check_output_path"]
+
+_NAME_MAX = 255  # bytes in one file name (Linux, macOS, Windows)
+
+
+def file_name(name, suffix="", *, what="name"):
+    """``name + suffix`` as a file name in the current folder, or an error naming ``what``.
+
+    Names are refused, not rewritten: a name with a path separator (``/``, ``\\``), a NUL or
+    other control character, a leading ``.`` (``.``, ``..``, hidden and ``.tmp-`` files), an
+    absolute path, or more than 255 bytes with the suffix would write somewhere other than a
+    plain file of that name.
+
+    Parameters
+    ----------
+    name : str
+        E.g. a scenario's ``name``.
+    suffix : str
+        Appended (``".nc"``, ``"-state.png"``).
+    what : str
+        The field named in the error message.
+
+    Raises
+    ------
+    InputError
+        The name is not a plain file name.
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise InputError(f"{what}: {name!r} cannot name a file; give a plain name such as 'my-run'")
+    bad = [c for c in name if ord(c) < 32 or ord(c) == 127]
+    if bad:
+        raise InputError(f"{what}: {name!r} contains the control character {bad[0]!r}; output files are named "
+                         "after it: give a plain name such as 'my-run'")
+    seps = {"/", "\\", os.sep} | ({os.altsep} if os.altsep else set())
+    if any(c in name for c in seps) or os.path.isabs(name):
+        raise InputError(f"{what}: {name!r} contains a path separator; output files are named after it and "
+                         "must stay in the output folder: give a plain name such as 'my-run' (and -o for the path)")
+    if name.startswith("."):
+        raise InputError(f"{what}: {name!r} starts with '.'; output files are named after it: give a plain name "
+                         "such as 'my-run'")
+    out = name + suffix
+    if len(os.fsencode(out)) > _NAME_MAX:
+        raise InputError(f"{what}: {name[:40]!r}... is too long for a file name ({len(os.fsencode(out))} bytes "
+                         f"with {suffix!r}, at most {_NAME_MAX}); give a shorter name")
+    return out
+
+
+def is_orbatt_result(path) -> bool:
+    """True when ``path`` is a file (or Zarr store) orbatt wrote: a NetCDF file, or a Zarr
+    folder, with the global attribute ``orbatt_version``. Reads the header only; a file that
+    cannot be opened as NetCDF is not an orbatt result."""
+    p = Path(path)
+    if p.is_dir():
+        for meta in (".zattrs", "zarr.json"):
+            try:
+                if '"orbatt_version"' in (p / meta).read_text(errors="replace"):
+                    return True
+            except OSError:
+                continue
+        return False
+    if not p.is_file():
+        return False
+    try:
+        with open(p, "rb") as f:
+            if f.read(8) != b"\x89HDF\r\n\x1a\n":  # netCDF-4 is HDF5; orbatt writes nothing else
+                return False
+        engine = check_engine(None)
+        if engine == "netcdf4":
+            import netCDF4
+
+            with netCDF4.Dataset(os.fspath(p), "r") as f:
+                return "orbatt_version" in f.ncattrs()
+        import h5netcdf
+
+        with h5netcdf.File(os.fspath(p), "r") as f:
+            return "orbatt_version" in f.attrs
+    except Exception:  # noqa: BLE001 - any failure to read it: not a result
+        return False
+
+
+def check_output_path(path, *, what="-o", zarr=False):
+    """Refuse an output path that cannot or must not be written, before any computation.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Where a result will be written (atomically, :func:`write_netcdf`).
+    what : str
+        The option or field named in error messages (``"-o"``, ``"name"``).
+    zarr : bool
+        Accept an existing Zarr store (a folder) that orbatt wrote at ``path``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a folder; its folder is missing, not a folder, or not writable (tested by
+        creating and removing a ``.tmp-`` file there); or ``path`` exists and is not an orbatt
+        result (:func:`is_orbatt_result`): only earlier orbatt results are overwritten.
+    """
+    s = os.fspath(path)
+    bad = [c for c in s if ord(c) < 32 or ord(c) == 127]
+    if bad:
+        raise InputError(f"{what}: {s!r} contains the control character {bad[0]!r}; give a plain path")
+    p = Path(s)
+    if not s or s.endswith(("/", os.sep)):
+        raise InputError(f"{what}: {s!r} is not a file name; give a file such as 'result.nc'")
+    if p.is_dir() and not (zarr and p.suffix == ".zarr"):
+        raise InputError(f"{what}: {s!r} is a folder; give a file in it such as '{p / 'result.nc'}'")
+    folder = p.parent
+    if not folder.is_dir():
+        state = "is not a folder" if folder.exists() else "does not exist"
+        raise InputError(f"{what}: the folder {str(folder)!r} of {s!r} {state}; create it or give another path")
+    probe = folder / f"{TEMP_PREFIX}probe.{os.getpid()}.{secrets.token_hex(4)}"
+    try:
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        os.unlink(probe)
+    except OSError as exc:
+        raise InputError(f"{what}: cannot write in the folder {str(folder)!r} of {s!r} "
+                         f"({exc.strerror or exc}); give a writable folder") from None
+    if (p.exists() or p.is_symlink()) and not is_orbatt_result(p):
+        raise InputError(f"{what}: {s!r} exists and is not an orbatt result; orbatt overwrites only its own "
+                         "results: give another path or remove that file")
+    return p
