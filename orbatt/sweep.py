@@ -925,7 +925,10 @@ def _energy(spec, sc, potential, orbit, inertia, q, Q, t):
     H = T + Upot
     if spec.energy == "jacobi":
         h = qt.rotate(orbit.orbital_quaternion(np.array(0.0)), np.array([0.0, 0.0, 1.0]))
-        H = H - orbit.n * (cn.space_momentum(q, Q) @ h)
+        G = cn.space_momentum(q, Q)
+        # h.G per member, written out: a BLAS product's kernel (and its rounding) depends on
+        # how many members share the call and on the CPU (issue 14)
+        H = H - orbit.n * (G[:, 0] * h[0] + G[:, 1] * h[1] + G[:, 2] * h[2])
     return H
 
 
