@@ -8,7 +8,7 @@ from . import canonical, euler, quaternion
 from .aem import read_aem, write_aem
 from .body import RigidBody
 from .dataset import open_dataset, to_dataset
-from .errors import InputError, IntegrationError, OrbattError
+from .errors import InputError, IntegrationError, OrbattError, ScenarioError, SweepError
 from .potentials import HeavyTop, Potential, TorqueFree
 from .propagate import propagate
 from .scenario import Scenario, load_scenario
@@ -17,7 +17,7 @@ from . import orbital
 from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to_orbital
 from .orbits import KeplerOrbit, ReboundOrbit
 from .potentials import GravityGradient
-from .sweep import Sweep, SweepError, load_sweep, run_sweep
+from .sweep import Sweep, load_sweep, run_sweep
 
 try:
     __version__ = _version("orbatt")
@@ -26,7 +26,7 @@ except PackageNotFoundError:  # pragma: no cover - source tree without install
 
 __all__ = [
     "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",
-    "OrbattError", "InputError", "IntegrationError",
+    "OrbattError", "InputError", "IntegrationError", "ScenarioError", "SweepError",
     "quaternion", "canonical", "euler", "__version__",
     "KeplerOrbit", "ReboundOrbit", "GravityGradient", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
