@@ -24,4 +24,5 @@ from .run import MAX_AUTO_CHUNK, ChunkInfo, run_sweep
 from .sampling import MAX_RESAMPLE_ROUNDS
 
 __all__ = ["SweepSpec", "Distribution", "Sweep", "SweepError", "ChunkInfo", "load_sweep", "run_sweep",
-           "PARAMETERS", "OUTPUTS", "DISTRIBUTIONS"]
+           "PARAMETERS", "OUTPUTS", "DISTRIBUTIONS", "DEFAULT_OUTPUTS", "SWEEP_KEYS", "Parameter", "parse_sweep_table",
+           "MAX_CASES", "MAX_RESAMPLE_ROUNDS", "MAX_AUTO_CHUNK", "FORMAT"]
