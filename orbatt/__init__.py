@@ -6,7 +6,7 @@ from . import canonical, euler, quaternion
 from .dataset.aem import read_aem, write_aem
 from .body import RigidBody
 from .dataset import open_dataset, to_dataset
-from .errors import InputError, IntegrationError, OrbattError
+from .errors import InputError, IntegrationError, OrbattError, ScenarioError, SweepError
 from .potentials import HeavyTop, Potential, TorqueFree
 from . import methods  # the subpackage; its function methods() is orbatt.methods.methods
 from .methods import METHODS, Method, Problem, register
@@ -18,13 +18,13 @@ from . import orbital
 from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to_orbital
 from .orbits import KeplerOrbit, ReboundOrbit
 from .potentials import GravityGradient
-from .sweep import Sweep, SweepError, load_sweep, run_sweep
+from .sweep import Sweep, load_sweep, run_sweep
 from .version import __version__
 
 __all__ = [
     "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",
     "Method", "METHODS", "methods", "register", "Problem", "ProgressInfo",
-    "OrbattError", "InputError", "IntegrationError",
+    "OrbattError", "InputError", "IntegrationError", "ScenarioError",
     "quaternion", "canonical", "euler", "__version__",
     "KeplerOrbit", "ReboundOrbit", "GravityGradient", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",

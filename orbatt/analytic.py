@@ -104,6 +104,7 @@ from scipy import special as sp
 
 from . import quaternion as qt
 from .errors import InputError
+from .body import RigidBody
 
 __all__ = ["torque_free", "torque_free_momentum", "jacobi"]
 
@@ -122,7 +123,6 @@ def _reject_quantity(value, name, what):
 
 
 def _inertia(inertia):
-    from .body import RigidBody
 
     if isinstance(inertia, RigidBody):
         return np.array(inertia.inertia_value, dtype=np.float64)

@@ -8,6 +8,47 @@ from . import units as U
 from .errors import InputError
 
 
+#: principal-moment triples ``(i, j, k)`` and the inequality ``Ii + Ij >= Ik`` each stands for
+TRIANGLE = ((0, 1, 2, "I1 + I2 >= I3"), (1, 2, 0, "I2 + I3 >= I1"), (2, 0, 1, "I3 + I1 >= I2"))
+#: relative tolerance of the triangle inequality (round-off in moments given as decimals)
+TRIANGLE_TOLERANCE = 1e-12
+
+
+def _violates(inertia, i, j, k):
+    return inertia[..., i] + inertia[..., j] < inertia[..., k] * (1.0 - TRIANGLE_TOLERANCE)
+
+
+def triangle_violation(inertia):
+    """Where principal moments violate the triangle inequality ``Ii + Ij >= Ik``.
+
+    Parameters
+    ----------
+    inertia : array_like (..., 3)
+        Principal moments ``(I1, I2, I3)`` (any one unit; body axes).
+
+    Returns
+    -------
+    ndarray of bool (...)
+        True where no rigid body has these moments (relative tolerance
+        :data:`TRIANGLE_TOLERANCE`).
+    """
+    inertia = np.asarray(inertia, dtype=np.float64)
+    bad = np.zeros(inertia.shape[:-1], dtype=bool)
+    for i, j, k, _ in TRIANGLE:
+        bad |= _violates(inertia, i, j, k)
+    return bad
+
+
+def check_triangle(inertia):
+    """Raise :class:`InputError` naming the first triangle inequality ``Ii + Ij >= Ik`` that
+    the principal moments ``inertia (3,)`` violate (see :func:`triangle_violation`)."""
+    inertia = np.asarray(inertia, dtype=np.float64)
+    for i, j, k, names in TRIANGLE:
+        if _violates(inertia, i, j, k):
+            raise InputError(f"inertia: {inertia.tolist()} violates the triangle inequality {names}; "
+                             "no rigid body has these principal moments")
+
+
 class RigidBody:
     """A rigid body given by its principal moments of inertia ``(I1, I2, I3)``.
 
@@ -38,12 +79,7 @@ class RigidBody:
             raise InputError(f"inertia: expected three principal moments [I1, I2, I3], got shape {value.shape}")
         if np.any(value <= 0):
             raise InputError(f"inertia: moments must be positive, got {value.tolist()}")
-        I1, I2, I3 = value
-        for (a, b, c, names) in ((I1, I2, I3, "I1 + I2 >= I3"), (I2, I3, I1, "I2 + I3 >= I1"),
-                                  (I3, I1, I2, "I3 + I1 >= I2")):
-            if a + b < c * (1.0 - 1e-12):
-                raise InputError(f"inertia: {value.tolist()} violates the triangle inequality {names}; "
-                                 "no rigid body has these principal moments")
+        check_triangle(value)
         self._value = value
         self._value.flags.writeable = False
 

@@ -17,3 +17,12 @@ class IntegrationError(OrbattError, RuntimeError):
     def __init__(self, message, t=None):
         super().__init__(message)
         self.t = t
+
+
+class ScenarioError(InputError):
+    """A scenario file is malformed; the message names the file, table, key, value and fix."""
+
+
+class SweepError(OrbattError, RuntimeError):
+    """A sweep could not finish (a task failed for good, e.g. its workers kept dying); the
+    chunks written so far are kept for ``resume``."""

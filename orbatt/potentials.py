@@ -14,6 +14,7 @@ from .body import RigidBody
 from .core import model as km
 from .core import potentials as kp
 from .errors import InputError
+from .orbits.base import OrbitProvider
 
 
 class Potential:
@@ -139,7 +140,6 @@ class GravityGradient(Potential):
     dimensionless = False
 
     def __init__(self, orbit):
-        from .orbits.base import OrbitProvider
 
         if not isinstance(orbit, OrbitProvider):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got "

@@ -6,7 +6,7 @@ import pytest
 
 from orbatt.scenario import ScenarioError, parse
 
-SCEN = Path(__file__).resolve().parent.parent / "scenarios"
+SCEN = Path(__file__).resolve().parents[2] / "scenarios"
 GOOD = (SCEN / "paper-keplerian.toml").read_text()
 
 

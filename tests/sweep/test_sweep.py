@@ -18,7 +18,7 @@ import orbatt
 from orbatt.scenario import Scenario, ScenarioError, parse
 from orbatt.sweep import PARAMETERS, Sweep, run_sweep
 
-SCEN = Path(__file__).resolve().parent.parent / "scenarios"
+SCEN = Path(__file__).resolve().parents[2] / "scenarios"
 pytestmark = pytest.mark.filterwarnings("ignore::orbatt.orbits.base.PeriapsisWarning")
 SHIPPED = (SCEN / "gg-leo-dispersion.toml").read_text()
 KEPLER = (SCEN / "paper-keplerian.toml").read_text()

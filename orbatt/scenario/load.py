@@ -1,0 +1,135 @@
+"""The :class:`Scenario` (a validated study, built and ready to run) and how to load one:
+:func:`load_scenario` from a file or a shipped name, :func:`shipped_scenarios`."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .. import units as U
+from ..body import RigidBody
+from ..errors import InputError, ScenarioError
+from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
+                    build_rebound_orbit)
+from .fields import FieldContext
+from .schema import Spec, parse
+from ..dataset import to_dataset
+from ..propagation import propagate
+
+__all__ = ["Scenario", "load_scenario", "shipped_scenarios"]
+
+
+class Scenario:
+    """A validated study: the body, potential, orbit, initial state and integration settings.
+
+    Build one with :func:`load_scenario`. :meth:`run` returns the result Dataset; calling it
+    again in the same process reuses everything built (the orbit, the compiled kernels).
+
+    Attributes
+    ----------
+    name, description : str
+    text : str
+        The scenario file's TOML text (stored in the Dataset's ``scenario`` attribute).
+    body : RigidBody
+    potential : Potential
+    orbit : OrbitProvider or None
+    state0 : State
+        Initial state in inertial components (converted from the orbital frame if the file
+        says ``frame = "orbital"``).
+    times : ndarray
+        Output times (s, or dimensionless): exactly ``k * output_step``.
+    method : str
+    settings : dict
+        ``rtol``, ``atol``, ``step`` as given (step in the time unit).
+    """
+
+    def __init__(self, spec: Spec, path=None):
+        self.spec = spec
+        self.path = path
+        self.name = spec.name
+        self.description = spec.description
+        self.text = spec.text
+        ctx = FieldContext(str(path) if path else spec.name)
+        self.body = RigidBody(spec.inertia if spec.dimensionless else spec.inertia * U.INERTIA)
+        self.orbit = None
+        kepler = period = None
+        if spec.orbit is not None:
+            kepler = build_kepler_orbit(ctx, spec.orbit)
+            period = kepler.period
+        self.times, self.t_end = build_output_times(ctx, spec.integration, period)
+        if spec.orbit is not None:
+            self.orbit = (kepler if spec.orbit["provider"] == "kepler"
+                          else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))
+        self.potential = build_potential(spec, self.orbit)
+        self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
+        self.method = spec.integration["method"]
+        self.settings = {k: spec.integration[k] for k in ("rtol", "atol") if k in spec.integration}
+        if "step" in spec.integration:
+            kind, value = spec.integration["step"]
+            self.settings["step"] = value * period if kind == "orbits" else value
+
+    def run(self, method=None, progress=False, **overrides):
+        """Propagate and return the result :class:`xarray.Dataset` (see :mod:`orbatt.dataset`).
+
+        Parameters
+        ----------
+        method : str, optional
+            Override the file's ``[integration] method`` (its rtol/atol/step still apply
+            where the method takes them).
+        progress : bool or callable
+            Progress bar (True) or callback; off by default.
+        **overrides
+            Further keyword arguments for :func:`orbatt.propagate` (e.g. ``rtol``).
+        """
+
+        kw = dict(self.settings)
+        kw.update(overrides)
+        m = method or self.method
+        try:
+            traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
+        except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
+            raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
+        epoch = self.orbit.epoch if self.orbit is not None else None
+        return to_dataset(traj, scenario_text=self.text, epoch=epoch, title=f"orbatt: {self.name}")
+
+    def __repr__(self):
+        return f"Scenario({self.name!r}, method={self.method!r}, outputs={self.times.size})"
+
+
+def shipped_scenarios():
+    """``[(name, description, path)]`` of the scenarios shipped with orbatt."""
+    from importlib.resources import files
+
+    try:
+        folder = files("orbatt.scenarios")
+    except ModuleNotFoundError:  # a source checkout used without installing: scenarios/ beside orbatt/
+        folder = Path(__file__).resolve().parent.parent.parent / "scenarios"
+    out = []
+    for f in sorted(folder.iterdir(), key=lambda p: p.name):
+        if f.name.endswith(".toml"):
+            spec = parse(f.read_text(), f.name)
+            out.append((spec.name, spec.description, f))
+    return out
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario file; return a :class:`Scenario`.
+
+    Parameters
+    ----------
+    path : str or Path
+        A TOML file, or the name of a shipped scenario (``orbatt scenarios`` lists them).
+
+    Raises
+    ------
+    ScenarioError
+        (an :class:`~orbatt.errors.InputError`) naming the file, the field, the value and
+        the fix.
+    """
+    p = Path(path)
+    if not p.is_file():
+        shipped = {name: f for name, _, f in shipped_scenarios()}
+        key = p.name[:-5] if p.name.endswith(".toml") else p.name
+        if key in shipped:
+            return Scenario(parse(shipped[key].read_text(), key), path=key)
+        raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
+                            f"{', '.join(sorted(shipped))}")
+    return Scenario(parse(p.read_text(), str(p)), path=p)

@@ -1,0 +1,274 @@
+"""The scenario file schema (TOML) and its validation, ``[sweep]`` table included.
+
+A scenario describes one study; :func:`load_scenario` validates it completely (unknown keys
+and tables are refused, every quantity is checked for its dimension) and returns a
+:class:`Scenario` whose :meth:`Scenario.run` returns the result Dataset.
+
+Schema (the contract other tools read; quantities are strings astropy parses, e.g.
+``"7000 km"``, ``"30 deg"``, ``"0.001 rad / s"``; plain numbers mean dimensionless)::
+
+    name = "..."                  # optional; defaults to the file name
+    description = "..."           # optional, one line
+    [body]        inertia = [I1, I2, I3]; heavy top: mass_g, center_of_mass = [x, y, z]
+    [initial]     q = [...] and Q = [...]
+                  | q = [...] or euler_313 = [phi, theta, psi], with omega = [w1, w2, w3]
+                  | euler_313 with euler_momenta = [Phi, Theta, Psi]
+                  frame = "inertial" (default) | "orbital"
+    [potential]   kind = "torque-free" | "heavy-top" | "gravity-gradient"
+                  sign = "physical" (default) | "paper"        (heavy top)
+    [orbit]       provider = "kepler" | "rebound"; central_body = "earth" | gm = "..."
+                  a, e, i, raan, argp, and one of true_anomaly | mean_anomaly
+                  epoch (ISO UTC); rebound: perturbations = ["j2", "moon", "sun"], integrator
+    [integration] method, rtol, atol | step, t_end, output_step
+                  (times: a time, a plain number if dimensionless, or "N orbits")
+    [sweep]       optional: parameters varied over many cases, run by ``orbatt sweep``
+                  (schema: :mod:`orbatt.scenario.sweep_schema`); ``orbatt run`` runs the nominal case
+
+Outputs fall exactly on ``k * output_step`` for ``k = 0 .. floor(t_end / output_step)``.
+``Q`` is in the unit implied by the inertia and time units (kg km^2 s^-1 for a dimensional
+body; plain numbers for a dimensionless one).
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import units as U
+from ..body import RigidBody
+from ..errors import InputError
+from ..orbits.base import parse_epoch
+from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
+from .sweep_schema import SweepSpec, parse_sweep_table
+from ..methods import METHODS
+
+__all__ = ["Spec", "parse", "TOP_KEYS", "TABLES", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
+
+TOP_KEYS = {"name", "description"}
+TABLES = {
+    "body": {"inertia", "mass_g", "center_of_mass"},
+    "initial": {"q", "Q", "omega", "euler_313", "euler_momenta", "frame"},
+    "potential": {"kind", "sign"},
+    "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
+              "mean_anomaly", "epoch", "perturbations", "integrator"},
+    "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
+    "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
+}
+REQUIRED_TABLES = ("body", "initial", "potential", "integration")
+POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
+FRAMES = ("inertial", "orbital")
+PROVIDERS = ("kepler", "rebound")
+
+
+def _check_keys(ctx, data):
+    """Unknown tables and keys refused; the required tables present."""
+    for key, val in data.items():
+        if key in TABLES:
+            if not isinstance(val, dict):
+                raise ctx.error(key, f"must be a table [{key}], got {val!r}")
+            allowed = TABLES[key]
+            if allowed is None:
+                continue
+            for k in val:
+                if k not in allowed:
+                    raise ctx.error(f"[{key}] {k}", f"unknown key; allowed keys in [{key}]: {', '.join(sorted(allowed))}")
+        elif key not in TOP_KEYS:
+            raise ctx.error(key, f"unknown table or key; allowed: {', '.join(sorted(TOP_KEYS | set(TABLES)))}")
+    for t in REQUIRED_TABLES:
+        if t not in data:
+            raise ctx.error(f"[{t}]", f"missing table; every scenario needs {', '.join('[' + x + ']' for x in REQUIRED_TABLES)}")
+
+
+@dataclass
+class Spec:
+    """The validated content of a scenario file, in internal units (plain floats)."""
+
+    name: str
+    description: str
+    text: str
+    dimensionless: bool
+    inertia: np.ndarray
+    potential_kind: str
+    heavy_top: dict = field(default_factory=dict)
+    initial: dict = field(default_factory=dict)
+    frame: str = "inertial"
+    orbit: dict | None = None
+    integration: dict = field(default_factory=dict)
+    sweep: SweepSpec | None = None  # the [sweep] table, if any
+
+
+def parse(text: str, source: str = "<scenario>") -> Spec:
+    """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field."""
+    ctx = FieldContext(source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ctx.error("TOML", f"{exc}; fix the syntax") from None
+    _check_keys(ctx, data)
+    body = data["body"]
+    if "inertia" not in body:
+        raise ctx.error("[body] inertia", "missing; give the principal moments [I1, I2, I3]")
+    inertia_raw = body["inertia"]
+    if not isinstance(inertia_raw, list) or len(inertia_raw) != 3:
+        raise ctx.error("[body] inertia", f"expected [I1, I2, I3], got {inertia_raw!r}")
+    dimless = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in inertia_raw)
+    inertia = parse_vector(ctx, "[body] inertia", inertia_raw, 3, U.INERTIA, dimensionless=dimless)
+    try:  # the body's own validation (positive, triangle inequality), reported with the file
+        RigidBody(inertia if dimless else inertia * U.INERTIA)
+    except InputError as exc:
+        raise ctx.error("[body] inertia", f"{inertia_raw!r}: {exc}") from None
+
+    pot = data["potential"]
+    kind = parse_choice(ctx, "[potential] kind", pot.get("kind"), POTENTIAL_KINDS)
+    heavy = {}
+    if kind == "heavy-top":
+        for k in ("mass_g", "center_of_mass"):
+            if k not in body:
+                raise ctx.error(f"[body] {k}", "missing; the heavy top needs mass_g (M g) and center_of_mass")
+        force = U.MASS * U.LENGTH / U.TIME**2
+        heavy["mass_g"] = parse_quantity(ctx, "[body] mass_g", body["mass_g"], force, dimensionless=dimless)
+        if heavy["mass_g"] < 0:
+            raise ctx.error("[body] mass_g", f"{body['mass_g']!r} must be non-negative")
+        heavy["center_of_mass"] = parse_vector(ctx, "[body] center_of_mass", body["center_of_mass"], 3, U.LENGTH,
+                                          dimensionless=dimless)
+        heavy["sign"] = parse_choice(ctx, "[potential] sign", pot.get("sign", "physical"), ("physical", "paper"))
+    else:
+        for k in ("mass_g", "center_of_mass"):
+            if k in body:
+                raise ctx.error(f"[body] {k}", f"only used by kind = 'heavy-top' (this scenario is {kind!r}); remove it")
+        if "sign" in pot:
+            raise ctx.error("[potential] sign", "only used by kind = 'heavy-top'; remove it")
+
+    orbit = None
+    if kind == "gravity-gradient":
+        if "orbit" not in data:
+            raise ctx.error("[orbit]", "missing table; the gravity-gradient potential needs an orbit")
+        if dimless:
+            raise ctx.error("[body] inertia", "the gravity-gradient potential needs a dimensional inertia "
+                                              "(e.g. '400 kg km2') to go with the orbit's units")
+        orbit = _parse_orbit(ctx, data["orbit"])
+    elif "orbit" in data:
+        raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
+
+    init = data["initial"]
+    frame = parse_choice(ctx, "[initial] frame", init.get("frame", "inertial"), FRAMES)
+    if frame == "orbital" and orbit is None:
+        raise ctx.error("[initial] frame", "'orbital' needs an [orbit]; use frame = 'inertial'")
+    initial = _parse_initial(ctx, init, dimless)
+
+    integ = _parse_integration(ctx, data["integration"], dimless, orbit)
+    sweep = None
+    if "sweep" in data:
+        sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
+                                  frame=frame)
+    name = data.get("name", Path(source).stem)
+    desc = data.get("description", "")
+    if not isinstance(name, str) or not isinstance(desc, str):
+        raise ctx.error("name/description", "must be strings")
+    return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
+                potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
+                integration=integ, sweep=sweep)
+
+
+def _parse_orbit(ctx, o):
+    out = {}
+    out["provider"] = parse_choice(ctx, "[orbit] provider", o.get("provider", "kepler"), PROVIDERS)
+    if "gm" in o and "central_body" in o:
+        raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
+    if "gm" in o:
+        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False)
+        if out["gm"] <= 0:
+            raise ctx.error("[orbit] gm", f"{o['gm']!r} must be positive")
+        out["central_body"] = None
+    else:
+        out["central_body"] = parse_choice(ctx, "[orbit] central_body", o.get("central_body", "earth"), ("earth",))
+    for k in ("a", "e", "i", "raan", "argp"):
+        if k not in o:
+            raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
+    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False)
+    if out["a"] <= 0:
+        raise ctx.error("[orbit] a", f"{o['a']!r} must be positive (elliptic orbits only)")
+    out["e"] = parse_quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
+    if not 0 <= out["e"] < 1:
+        raise ctx.error("[orbit] e", f"{o['e']!r} is outside [0, 1): only elliptic orbits are supported")
+    for k in ("i", "raan", "argp"):
+        out[k] = parse_quantity(ctx, f"[orbit] {k}", o[k], U.ANGLE, dimensionless=False)
+    anomalies = [k for k in ("true_anomaly", "mean_anomaly") if k in o]
+    if len(anomalies) != 1:
+        raise ctx.error("[orbit] true_anomaly", "give exactly one of true_anomaly or mean_anomaly")
+    out["anomaly_kind"] = anomalies[0]
+    out["anomaly"] = parse_quantity(ctx, f"[orbit] {anomalies[0]}", o[anomalies[0]], U.ANGLE, dimensionless=False)
+    if "epoch" in o:
+        try:  # the orbit providers' own parser: a string astropy parses, taken as UTC
+            out["epoch"] = parse_epoch(str(o["epoch"]))
+        except InputError:
+            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
+    else:
+        out["epoch"] = None
+    if out["provider"] == "rebound":
+        pert = o.get("perturbations", [])
+        if not isinstance(pert, list):
+            raise ctx.error("[orbit] perturbations", f"expected a list such as ['j2'], got {pert!r}")
+        for p in pert:
+            parse_choice(ctx, "[orbit] perturbations", p, ("j2", "moon", "sun"))
+        if ("moon" in pert or "sun" in pert) and out["epoch"] is None:
+            raise ctx.error("[orbit] epoch", "third bodies (moon, sun) need an epoch to place them")
+        out["perturbations"] = list(pert)
+        out["integrator"] = parse_choice(ctx, "[orbit] integrator", o.get("integrator", "ias15"), ("ias15", "whfast"))
+    else:
+        for k in ("perturbations", "integrator"):
+            if k in o:
+                raise ctx.error(f"[orbit] {k}", "only used by provider = 'rebound'; remove it or switch provider")
+    return out
+
+
+def _parse_initial(ctx, init, dimless):
+    has = {k for k in ("q", "Q", "omega", "euler_313", "euler_momenta") if k in init}
+    valid = ({"q", "Q"}, {"q", "omega"}, {"euler_313", "omega"}, {"euler_313", "euler_momenta"})
+    if has not in valid:
+        raise ctx.error("[initial]", f"got keys {sorted(has)}; give one of: q and Q | q and omega | "
+                                     "euler_313 and omega | euler_313 and euler_momenta")
+    out = {}
+    if "q" in has:
+        q = parse_plain_vector(ctx, "[initial] q", init["q"], 4)
+        n = float(np.linalg.norm(q))
+        if abs(n - 1) > 1e-6:
+            raise ctx.error("[initial] q", f"{init['q']!r} has |q| = {n:.9g}, not 1; give a unit quaternion "
+                                           "(scalar first q0, q1, q2, q3)")
+        out["q"] = q / n
+    else:
+        out["euler_313"] = parse_vector(ctx, "[initial] euler_313", init["euler_313"], 3, U.ANGLE, dimensionless=True)
+    if "Q" in has:
+        out["Q"] = parse_plain_vector(ctx, "[initial] Q", init["Q"], 4)
+    if "omega" in has:
+        out["omega"] = parse_vector(ctx, "[initial] omega", init["omega"], 3, U.RATE, dimensionless=dimless)
+    if "euler_momenta" in has:
+        out["euler_momenta"] = parse_vector(ctx, "[initial] euler_momenta", init["euler_momenta"], 3, U.MOMENTUM,
+                                       dimensionless=dimless)
+    return out
+
+
+def _parse_integration(ctx, g, dimless, orbit):
+
+    out = {"method": g.get("method", "dop853")}
+    if out["method"] not in METHODS:
+        raise ctx.error("[integration] method", f"{out['method']!r} is not one of {', '.join(sorted(METHODS))}")
+    for k in ("rtol", "atol"):
+        if k in g:
+            v = g[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (v > 0 and math.isfinite(v)):
+                raise ctx.error(f"[integration] {k}", f"{v!r} must be a positive number")
+            out[k] = float(v)
+    if "step" in g:
+        out["step"] = parse_time(ctx, "[integration] step", g["step"], dimless, orbit)
+    for k in ("t_end", "output_step"):
+        if k not in g:
+            raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")
+        out[k] = parse_time(ctx, f"[integration] {k}", g[k], dimless, orbit)
+        if out[k][1] <= 0:
+            raise ctx.error(f"[integration] {k}", f"{g[k]!r} must be positive")
+    return out
+

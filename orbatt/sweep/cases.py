@@ -1,0 +1,170 @@
+"""The :class:`Sweep`: a scenario with a ``[sweep]`` table, its seed, and every case's
+parameter values (drawn once, when it is built); :func:`load_sweep` reads one from a file.
+Manual: ``docs/sweeps.md``."""
+from __future__ import annotations
+
+import hashlib
+import json
+import secrets
+
+import numpy as np
+
+from ..errors import InputError
+from ..scenario import load_scenario
+from ..scenario.sweep_schema import parameter_units
+from .chunk import compute_chunk
+from .sampling import draw_samples, nominal_values
+
+__all__ = ["Sweep", "load_sweep", "FORMAT"]
+
+#: format tag of a sweep's fingerprint and parts manifest
+FORMAT = "orbatt-sweep-1"
+
+
+class Sweep:
+    """A validated sweep: the nominal :class:`~orbatt.scenario.Scenario`, its ``[sweep]``
+    table, and every case's parameter values (drawn once, here).
+
+    Build one with :func:`load_sweep`.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A scenario with a ``[sweep]`` table.
+    seed : int, optional
+        Overrides the table's seed (or fixes the one to use when the table has none).
+
+    Attributes
+    ----------
+    scenario : Scenario
+    spec : SweepSpec
+    seed : int
+    seed_source : str
+        ``"scenario"``, ``"argument"`` or ``"default"`` (drawn from OS entropy).
+    cases : int
+    values : dict of str to ndarray (cases,)
+        Every swept parameter's value per case (internal units).
+    attitude_axis : ndarray (cases, 3) or None
+    resampled : int
+        Cases redrawn for physical limits (``on_invalid = "resample"``).
+    nominal : dict
+        Nominal value of every parameter (internal units).
+    fingerprint : str
+        Hash of the scenario text, seed and number of cases (checked on resume).
+    """
+
+    def __init__(self, scenario, seed=None):
+        spec = scenario.spec.sweep
+        if spec is None:
+            raise InputError(f"{scenario.path or scenario.name}: [sweep]: missing table; a sweep scenario needs "
+                             "[sweep] with samples and [sweep.parameters] (see docs/sweeps.md)")
+        self.scenario = scenario
+        self.spec = spec
+        if seed is not None:
+            if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= int(seed) < 2**63:
+                raise InputError(f"seed: {seed!r} must be an integer in [0, 2**63)")
+            self.seed, self.seed_source = int(seed), "argument"
+        elif spec.seed is not None:
+            self.seed, self.seed_source = spec.seed, "scenario"
+        else:
+            self.seed, self.seed_source = secrets.randbits(63), "default"
+        self.cases = spec.cases
+        self.nominal = nominal_values(scenario)
+        dimless = scenario.spec.dimensionless
+        self.units = parameter_units(dimless)
+        self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, self.units)
+        h = hashlib.sha256(f"{FORMAT}\n{self.seed}\n{self.cases}\n".encode() + scenario.text.encode())
+        self.fingerprint = h.hexdigest()[:32]
+
+    @property
+    def source(self) -> str:
+        return str(self.scenario.path) if self.scenario.path is not None else self.scenario.name
+
+    def job(self, start, stop, numba_threads=None) -> dict:
+        """The payload of a task: the chunk of cases ``start .. stop - 1``.
+
+        Parameters
+        ----------
+        start, stop : int
+            Case range (``stop`` excluded).
+        numba_threads : int, optional
+            Threads numba may use inside the task (None: numba's default).
+
+        Returns
+        -------
+        dict
+            The scenario text and source, the range, the chunk's parameter values and
+            attitude axes (plain data: cheap to send, nothing to scatter).
+        """
+        return {"text": self.scenario.text, "source": self.source, "start": int(start), "stop": int(stop),
+                "values": {k: v[start:stop].copy() for k, v in self.values.items()},
+                "axis": None if self.attitude_axis is None else self.attitude_axis[start:stop].copy(),
+                "numba_threads": numba_threads}
+
+    def compute(self, start=0, stop=None):
+        """Compute a range of cases here, as one chunk: one ensemble call of
+        :func:`orbatt.propagate` per distinct orbit.
+
+        This is what every Dask task runs; ``sweep.compute()`` is the serial reference of a
+        whole sweep (numba uses every core).
+
+        Parameters
+        ----------
+        start, stop : int
+            Case range (``stop`` excluded; default all cases).
+
+        Returns
+        -------
+        xarray.Dataset
+            The cases' outputs (dimension ``case``), without the sweep's global attributes
+            (:func:`run_sweep` adds them).
+        """
+        stop = self.cases if stop is None else stop
+        if not 0 <= start < stop <= self.cases:
+            raise InputError(f"cases: [{start}, {stop}) is not a range within the {self.cases} cases")
+        return compute_chunk(self.scenario, self.spec, self.job(start, stop), self.units)
+
+    def attrs(self) -> dict:
+        """The sweep's global attributes (seed, parameters, cases, ...)."""
+        desc = {k: dict(d.describe(self.nominal.get(k)), units=self.units[k]) for k, d in self.spec.parameters.items()}
+        return {
+            "sweep_format": FORMAT,
+            "sweep_fingerprint": self.fingerprint,
+            "sweep_seed": np.int64(self.seed),
+            "sweep_seed_source": self.seed_source,
+            "sweep_rng": "numpy.random.Generator(PCG64(sweep_seed))",
+            "sweep_cases": np.int64(self.cases),
+            "sweep_samples": np.int64(self.spec.samples),
+            "sweep_grid_points": np.int64(self.spec.grid_points),
+            "sweep_parameters": json.dumps(desc),  # canonical order
+            "sweep_outputs": json.dumps(list(self.spec.outputs)),
+            "sweep_on_invalid": self.spec.on_invalid,
+            "sweep_resampled_cases": np.int64(self.resampled),
+        }
+
+    def __repr__(self):
+        return (f"Sweep({self.scenario.name!r}, cases={self.cases}, parameters={list(self.spec.parameters)}, "
+                f"seed={self.seed})")
+
+
+def load_sweep(path, *, seed=None) -> Sweep:
+    """Read a scenario file with a ``[sweep]`` table, validate it and draw the samples.
+
+    Parameters
+    ----------
+    path : str or Path
+        A TOML file, or the name of a shipped scenario.
+    seed : int, optional
+        Use this seed instead of the file's (or where the file has none).
+
+    Returns
+    -------
+    Sweep
+
+    Raises
+    ------
+    InputError
+        A malformed file or ``[sweep]`` table, a missing ``[sweep]``, or (with
+        ``on_invalid = "error"``) a sample outside the physical limits, named.
+    """
+    return Sweep(load_scenario(path), seed=seed)

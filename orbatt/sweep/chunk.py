@@ -1,0 +1,376 @@
+"""One chunk of a sweep: the physics of its cases and its Dataset (what every task runs).
+
+A chunk is a range of cases computed together: its cases are grouped by identical orbit and
+each group is **one ensemble call** of :func:`orbatt.propagate`. Every per-case quantity
+(initial state, pointing error, energy) is computed per case - elementwise, with sums over
+the last axis written out - never through BLAS or a reduction across cases: a member's
+result must not depend on how many members share the call, nor on the CPU (issue 14).
+Quantities are in internal units (:mod:`orbatt.units`); frames as in ``DESIGN.md`` §1.
+"""
+from __future__ import annotations
+
+import functools
+import json
+import time
+import warnings
+
+import numpy as np
+
+from .. import canonical as cn
+from .. import quaternion as qt
+from ..core import model as km
+from ..core import potentials as kp
+from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
+from ..dataset import cf_variable, to_dataset
+from ..errors import IntegrationError
+from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_rebound_orbit, parse
+from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
+                                     parameter_units)
+from .sampling import nominal_rates
+from ..potentials import GravityGradient
+from ..state import State, unit_quaternion
+from ..orbital import body_rate_from_orbital
+from ..orbits.base import as_times
+from ..propagation import propagate
+from ..trajectory import Trajectory
+from ..body import RigidBody
+
+__all__ = ["run_chunk", "compute_chunk", "orbit_groups", "initial_states", "propagate_group", "pointing_error",
+           "conserved_energy", "add_stats", "scenario_from_text", "chunk_dataset", "concat_cases"]
+
+_ELEMENT = {"orbit_a": "a", "orbit_e": "e", "orbit_i": "i", "orbit_raan": "raan", "orbit_argp": "argp",
+            "orbit_true_anomaly": "anomaly", "orbit_mean_anomaly": "anomaly"}
+
+
+@functools.lru_cache(maxsize=4)
+def scenario_from_text(text, source):
+    """The :class:`~orbatt.scenario.Scenario` of a scenario text (cached per process, so a
+    worker builds a scenario's orbit and kernels once; warnings silenced: the driver warned)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Scenario(parse(text, source), path=source)
+
+
+def run_chunk(job):
+    """Task function: compute one chunk from its payload (:meth:`orbatt.sweep.Sweep.job`);
+    the Dataset's ``sweep_chunk_seconds`` attribute holds the task's wall time."""
+    t0 = time.perf_counter()
+    threads = job.get("numba_threads")
+    if threads:
+        import numba
+
+        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+    sc = scenario_from_text(job["text"], job["source"])
+    ds = compute_chunk(sc, sc.spec.sweep, job, parameter_units(sc.spec.dimensionless))
+    ds.attrs["sweep_chunk_seconds"] = time.perf_counter() - t0
+    return ds
+
+
+def add_stats(total, stats, skip=()):
+    """Add the numbers of the integration statistics ``stats`` (a dict, or its JSON text)
+    into ``total`` (a dict, changed in place, and returned); non-numbers and the keys in
+    ``skip`` are left out. The one place where a sweep sums statistics."""
+    if stats is None or isinstance(stats, str):
+        try:
+            stats = json.loads(stats)
+        except (TypeError, ValueError):
+            return total
+    for k, v in stats.items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and k not in skip:
+            total[k] = total.get(k, 0) + v
+    return total
+
+
+def orbit_groups(sc, spec, values, n):
+    """``[(orbit, potential, idx)]``: the chunk's ``n`` cases grouped by identical orbit, in
+    order of first appearance (one group with the nominal orbit when no element varies)."""
+    swept = [k for k in ORBIT_PARAMETERS if k in spec.parameters]
+    if not swept:
+        return [(sc.orbit, sc.potential, np.arange(n))]
+
+    cols = np.stack([values[k] for k in swept], axis=-1)
+    keys, first, inverse = np.unique(cols, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    ctx = FieldContext(sc.name)
+    out = []
+    for g in np.argsort(first):
+        o = dict(sc.spec.orbit)
+        for k, v in zip(swept, keys[g]):
+            o[_ELEMENT[k]] = float(v)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # periapsis warnings: the nominal scenario already warned
+            orbit = build_kepler_orbit(ctx, o)
+            if o["provider"] == "rebound":
+                orbit = build_rebound_orbit(ctx, o, orbit, float(sc.times[-1]))
+        out.append((orbit, GravityGradient(orbit), np.flatnonzero(inverse == g)))
+    return out
+
+
+def initial_states(sc, spec, values, axis, inertia, orbit, idx):
+    """``(q, Q)`` (m, 4) of the cases ``idx``, inertial components (``docs/sweeps.md``: the
+    initial state of a case): built from each case's attitude and rates with its own inertia
+    ``inertia[idx]`` and ``orbit``; the nominal state as is when no parameter touches it."""
+
+    m = idx.size
+    frame = sc.spec.frame
+    touches = (any(k in spec.parameters for k in INERTIA_PARAMETERS + RATE_PARAMETERS + ("attitude_angle",))
+               or (frame == "orbital" and any(k in spec.parameters for k in ORBIT_PARAMETERS)))
+    if not touches:
+        st = sc.state0
+        return np.broadcast_to(st.q, (m, 4)).copy(), np.broadcast_to(st.Q, (m, 4)).copy()
+    ini = sc.spec.initial
+    w = np.array(np.broadcast_to(nominal_rates(sc), (m, 3)))
+    for k, name in enumerate(RATE_PARAMETERS):
+        if name in values:
+            w[:, k] = values[name][idx]
+    if frame == "orbital":
+        q_nom = ini["q"] if "q" in ini else qt.from_euler313(*ini["euler_313"])
+        q_nom = q_nom / qt.norm(q_nom)
+    else:
+        q_nom = sc.state0.q
+    q_c = np.array(np.broadcast_to(q_nom, (m, 4)))
+    if "attitude_angle" in spec.parameters:
+        q_c = qt.mul(q_c, qt.from_axis_angle(axis[idx], values["attitude_angle"][idx]))
+    if frame == "orbital":
+
+        t0 = as_times(float(sc.times[0]))
+        q = qt.mul(orbit.orbital_quaternion(t0), q_c)
+        w = body_rate_from_orbital(orbit, t0, q_c, w)
+    else:
+        q = q_c
+    q = unit_quaternion(q)
+    st = State(sc.body, q, cn.momentum_from_omega(q, w, inertia[idx]))
+    return st.q, st.Q
+
+
+def propagate_group(sc, bodies, q0, Q0, potential):
+    """Ensemble propagation of one group: ``(trajectory or None, q, Q, failed, stats)``,
+    ``q, Q`` (m, N, 4). A member that fails is rerun alone and left NaN (members are
+    independent, so the others' results do not change)."""
+
+    kw = dict(sc.settings)
+    m = q0.shape[0]
+    failed = np.zeros(m, dtype=bool)
+    try:
+        tr = propagate(bodies if len(bodies) > 1 else bodies[0], State(sc.body, q0, Q0), potential, sc.times,
+                       method=sc.method, **kw)
+        return tr, tr.q, tr.Q, failed, dict(tr.stats)
+    except IntegrationError:
+        pass
+    N = sc.times.size
+    q = np.full((m, N, 4), np.nan)
+    Q = np.full((m, N, 4), np.nan)
+    stats = {}
+    tr = None
+    for e in range(m):
+        b = bodies[e] if len(bodies) > 1 else bodies[0]
+        try:
+            t1 = propagate([b], State(sc.body, q0[e:e + 1], Q0[e:e + 1]), potential, sc.times, method=sc.method, **kw)
+        except IntegrationError:
+            failed[e] = True
+            continue
+        tr = t1
+        q[e], Q[e] = t1.q[0], t1.Q[0]
+        add_stats(stats, t1.stats)
+    return tr, q, Q, failed, stats
+
+
+def _norm3(v):
+    """``|v|`` of 3-vectors ``v (..., 3)``, per vector (written out, left to right)."""
+    return np.sqrt(v[..., 0] * v[..., 0] + v[..., 1] * v[..., 1] + v[..., 2] * v[..., 2])
+
+
+def pointing_error(spec, q, p):
+    """Angle (rad) between the body and the reference frame at every output.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        Its ``pointing_axis`` (body components) selects the angle between that body axis and
+        the reference axis with the same components; None: the whole attitude's rotation angle.
+    q : ndarray (m, N, 4)
+        Attitudes (body -> inertial).
+    p : ndarray (N, 4) or None
+        Orbital quaternion (orbital -> inertial) for the orbital reference; None: inertial.
+
+    Returns
+    -------
+    ndarray (m, N)
+    """
+    q_rel = q if p is None else qt.mul(qt.conj(p)[None], q)
+    if spec.pointing_axis is None:
+        return 2.0 * np.arctan2(_norm3(q_rel[..., 1:]), np.abs(q_rel[..., 0]))
+    b = spec.pointing_axis
+    b_ref = qt.rotate(q_rel, b)  # the body axis in reference-frame components
+    cos = b_ref[..., 0] * b[0] + b_ref[..., 1] * b[1] + b_ref[..., 2] * b[2]
+    return np.arctan2(_norm3(np.cross(b_ref, b)), cos)
+
+
+def conserved_energy(spec, potential, orbit, inertia, q, Q, t):
+    """The conserved energy of members ``q, Q (m, 4)`` at time ``t``: ``H = T + U``
+    (``spec.energy == "hamiltonian"``) or the Jacobi integral ``H - n h.G`` (``"jacobi"``:
+    ``n`` the orbit's mean motion, ``h`` its normal, ``G`` the space angular momentum);
+    ``inertia (m, 3)``. Energy unit of the scenario (kg km^2 s^-2, or plain)."""
+    g = cn.body_momentum(q, Q)
+    T = 0.5 * (g[:, 0] * g[:, 0] / inertia[:, 0] + g[:, 1] * g[:, 1] / inertia[:, 1]
+               + g[:, 2] * g[:, 2] / inertia[:, 2])
+    Upot = np.empty(q.shape[0])
+    tt = np.array([t])
+    model = potential.kernel_model()
+    for e in range(q.shape[0]):
+        if not np.all(np.isfinite(q[e])):
+            Upot[e] = np.nan
+            continue
+        Upot[e] = km.evaluate_many(tt, np.ascontiguousarray(q[e:e + 1]), np.ascontiguousarray(inertia[e]), *model,
+                                   kp.new_work())[0][0]
+    H = T + Upot
+    if spec.energy == "jacobi":
+        h = qt.rotate(orbit.orbital_quaternion(np.array(0.0)), np.array([0.0, 0.0, 1.0]))
+        G = cn.space_momentum(q, Q)
+        H = H - orbit.n * (G[:, 0] * h[0] + G[:, 1] * h[1] + G[:, 2] * h[2])
+    return H
+
+
+def compute_chunk(sc, spec, job, units):
+    """Compute the cases of a task's payload ``job`` (:meth:`orbatt.sweep.Sweep.job`).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The nominal scenario.
+    spec : SweepSpec
+        Its ``[sweep]`` table.
+    job : dict
+        ``start``, ``stop``, ``values`` (the chunk's parameter values), ``axis``.
+    units : dict
+        CF unit string of every parameter (:func:`~orbatt.scenario.sweep_schema.parameter_units`).
+
+    Returns
+    -------
+    xarray.Dataset
+        The cases' outputs along ``case``; ``integration_stats`` (JSON) summed over groups.
+    """
+
+    start, stop = job["start"], job["stop"]
+    n = stop - start
+    values = job["values"]
+    axis = job["axis"]
+    dimless = sc.spec.dimensionless
+    inertia = np.array(np.broadcast_to(sc.spec.inertia, (n, 3)), dtype=np.float64)
+    for k, name in enumerate(INERTIA_PARAMETERS):
+        if name in values:
+            inertia[:, k] = values[name]
+    vary_inertia = any(k in spec.parameters for k in INERTIA_PARAMETERS)
+    if vary_inertia:
+
+        iu = sc.body.inertia_unit
+        all_bodies = [RigidBody(inertia[e].tolist() if dimless else inertia[e] * iu) for e in range(n)]
+    outs = set(spec.outputs)
+    res = {name: np.empty((n, 4)) for name in ("q_initial", "Q_initial", "q_final", "Q_final")}
+    res.update(inertia=inertia, failed=np.zeros(n, dtype=bool), pointing_error=np.full(n, np.nan),
+               energy_error=np.full(n, np.nan))
+    stats = {}
+    pieces = []
+    for orbit, potential, idx in orbit_groups(sc, spec, values, n):
+        q0, Q0 = initial_states(sc, spec, values, axis, inertia, orbit, idx)
+        bodies = [all_bodies[e] for e in idx] if vary_inertia else [sc.body]
+        tr, q, Q, bad, st = propagate_group(sc, bodies, q0, Q0, potential)
+        add_stats(stats, st)
+        res["failed"][idx] = bad
+        res["q_initial"][idx], res["Q_initial"][idx] = q0, Q0
+        res["q_final"][idx], res["Q_final"][idx] = q[:, -1], Q[:, -1]
+        if {"max_pointing_error", "tumbling"} & outs:
+            p = orbit.orbital_quaternion(sc.times) if spec.pointing_reference == "orbital" else None
+            res["pointing_error"][idx] = np.max(pointing_error(spec, q, p), axis=-1)
+        if "final_energy_error" in outs:
+            E0 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, 0], Q[:, 0], float(sc.times[0]))
+            E1 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, -1], Q[:, -1], float(sc.times[-1]))
+            res["energy_error"][idx] = (E1 - E0) / np.abs(E0)
+        if "trajectory" in outs:
+            body0 = bodies[0]
+            full = Trajectory(body=body0, potential=potential, t=sc.times, q=q, Q=Q,
+                              inertia=inertia[idx], method=tr.method if tr is not None else sc.method,
+                              settings=tr.settings if tr is not None else {}, stats=st, complete=True)
+            with np.errstate(invalid="ignore"):
+                piece = to_dataset(full, scenario_text=sc.text, title=f"orbatt sweep: {sc.name}")
+            piece = piece.assign_coords(case=("case", start + idx, piece["case"].attrs))
+            if any(k in spec.parameters for k in ORBIT_PARAMETERS):
+                for name in ("r", "p", "true_anomaly", "position", "velocity"):
+                    if name in piece:
+                        piece[name] = piece[name].expand_dims(case=piece["case"].size).copy()
+            pieces.append(piece)
+
+    return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
+
+
+def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
+    """The Dataset of a chunk's cases ``case`` (``docs/sweeps.md``: Outputs).
+
+    ``res`` holds the per-case results (internal units): ``q_initial, Q_initial, q_final,
+    Q_final`` (n, 4), ``inertia`` (n, 3), ``failed``, ``pointing_error`` (rad),
+    ``energy_error``; ``pieces`` the trajectory Datasets of the orbit groups (or none).
+    """
+    import xarray as xr
+
+    UN = DIMENSIONLESS_UNITS if sc.spec.dimensionless else DIMENSIONAL_UNITS
+    outs = set(spec.outputs)
+    perr = res["pointing_error"]
+    coords = {"case": cf_variable(("case",), case, "1", "sweep case (index into the sampled parameters)"),
+              "axis": cf_variable(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
+              "axis_label": xr.Variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"})}
+    if "final_state" in outs:
+        coords["quat"] = cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
+                              quaternion_order="w x y z")
+        coords["quat_label"] = xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"})
+    for name in spec.parameters:
+        coords[name] = cf_variable(("case",), values[name], units[name], f"sampled parameter: {PARAMETERS[name].long_name}")
+    if axis is not None:
+        coords["attitude_axis"] = cf_variable(("case", "axis"), axis, "1",
+                                       "axis of the initial attitude perturbation (unit vector)", frame="B")
+    data = {}
+    qattrs = {"quaternion_order": "w x y z", "frames": "B relative to S"}
+    if "final_state" in outs:
+        data["q_initial"] = cf_variable(("case", "quat"), res["q_initial"], "1", "initial attitude quaternion", **qattrs)
+        data["Q_initial"] = cf_variable(("case", "quat"), res["Q_initial"], UN["momentum"], "initial conjugate momentum")
+        data["q_final"] = cf_variable(("case", "quat"), res["q_final"], "1", "final attitude quaternion (at the last output time)",
+                               **qattrs)
+        data["Q_final"] = cf_variable(("case", "quat"), res["Q_final"], UN["momentum"], "final conjugate momentum")
+    if "trajectory" not in outs:
+        data["inertia"] = cf_variable(("case", "axis"), res["inertia"], UN["inertia"], "principal moments of inertia (I1, I2, I3)",
+                               frame="B")
+    ref = (f"body axis {spec.pointing_axis.tolist()} vs the same axis of the {spec.pointing_reference} frame"
+           if spec.pointing_axis is not None else f"rotation angle of the attitude relative to the "
+                                                  f"{spec.pointing_reference} frame")
+    if "max_pointing_error" in outs:
+        data["max_pointing_error"] = cf_variable(("case",), perr, "rad", "maximum pointing error over the output times",
+                                          definition=ref)
+    if "tumbling" in outs:
+        data["tumbling"] = cf_variable(("case",), np.where(np.isnan(perr), -1, perr > spec.tumbling_angle).astype(np.int8),
+                                "1", "tumbling flag: maximum pointing error above tumbling_angle",
+                                flag_values=np.array([-1, 0, 1], dtype=np.int8),
+                                flag_meanings="failed not_tumbling tumbling", tumbling_angle_rad=spec.tumbling_angle,
+                                definition=ref)
+    if "final_energy_error" in outs:
+        what = ("H = T + U" if spec.energy == "hamiltonian" else "the Jacobi integral H - n h.G")
+        data["final_energy_error"] = cf_variable(("case",), res["energy_error"], "1", f"relative change of the conserved energy "
+                                          f"(E(t_end) - E(t0)) / |E(t0)|, E = {what}")
+    data["integration_failed"] = cf_variable(("case",), res["failed"].astype(np.int8), "1",
+                                      "1 where the integration of the case stopped (its values are NaN)",
+                                      flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="ok failed")
+    if pieces:
+        ds = concat_cases(pieces).sortby("case").drop_attrs(deep=False)
+        ds = ds.assign_coords(coords).assign(data)
+    else:
+        ds = xr.Dataset(data, coords=coords)
+    ds.attrs["integration_stats"] = json.dumps(stats, sort_keys=True)
+    return ds
+
+
+def concat_cases(pieces):
+    """Datasets of disjoint case ranges joined along ``case`` (attributes of the first)."""
+    import xarray as xr
+
+    if len(pieces) == 1:
+        return pieces[0]
+    return xr.concat(pieces, dim="case", data_vars="minimal", coords="minimal", compat="override", join="exact",
+                     combine_attrs="override")
