@@ -101,10 +101,6 @@ class RigidBody:
         return U.DIMENSIONLESS if self.dimensionless else U.MOMENTUM
 
     @property
-    def energy_unit(self):
-        return U.DIMENSIONLESS if self.dimensionless else U.ENERGY
-
-    @property
     def rate_unit(self):
         return U.DIMENSIONLESS if self.dimensionless else U.RATE
 

@@ -18,6 +18,7 @@ from orbatt import analytic as an
 from orbatt import canonical as cn
 from orbatt import quaternion as qt
 from orbatt.core import hamiltonian as H
+from orbatt.core import model as km
 from orbatt.core import potentials as kp
 from orbatt.errors import InputError
 
@@ -33,11 +34,11 @@ def integrate(inertia, q0, Q0, t_end):
     """Eq. (7) with the compiled kernel (torque-free); returns step-end times and states."""
     inertia = np.asarray(inertia, dtype=np.float64)
     work = kp.new_work()
-    params = np.zeros(1)
+    model = km.build()
 
     def f(t, y):
         dy = np.empty(8)
-        H.rhs(t, y, inertia, kp.TORQUE_FREE, params, kp.EMPTY_TABLE, work, dy)
+        H.rhs(t, y, inertia, *model, work, dy)
         return dy
 
     sol = solve_ivp(f, (0.0, t_end), np.r_[q0, Q0], method="DOP853", rtol=RTOL, atol=RTOL)

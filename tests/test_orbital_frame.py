@@ -12,6 +12,7 @@ from orbatt import canonical as cn
 from orbatt import orbital as orb
 from orbatt import quaternion as qt
 from orbatt.core import hamiltonian as ham
+from orbatt.core import model as km
 from orbatt.core import potentials as kp
 from orbatt.errors import InputError
 from orbatt.orbits import KeplerOrbit, ReboundOrbit
@@ -36,13 +37,13 @@ def paper():
 
 def integrate(orbit, state, t_eval, rtol=1e-13):
     """Hamilton's equations (compiled RHS) with scipy's DOP853, integrating to each output time."""
-    kind, params, table = orbit.kernel()
+    model = km.from_spec(*orbit.kernel())
     work = kp.new_work()
     inertia = state.body.inertia_value
 
     def f(t, y):
         dy = np.empty(8)
-        ham.rhs(t, y, inertia, kind, params, table, work, dy)
+        ham.rhs(t, y, inertia, *model, work, dy)
         return dy
 
     sol = solve_ivp(f, (t_eval[0], t_eval[-1]), state.y, method="DOP853", rtol=rtol, atol=rtol * 1e-3,

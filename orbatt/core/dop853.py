@@ -51,7 +51,7 @@ from .hamiltonian import rhs
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
-__all__ = ["advance", "advance_batch", "new_state", "momentum_scale", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
+__all__ = ["advance", "advance_batch", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
            "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
            "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_SIZE", "CNT_STEPS", "CNT_REJECTED",
            "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
@@ -164,9 +164,55 @@ def next_after_reject(hh, fac11):
 
 
 @jit_inline
+def reject_nonfinite(cnt, flags, hh):
+    """Count a rejection for a non-finite error or derivative: ``(flags, h)`` with the
+    non-finite flag set and the step cut tenfold."""
+    cnt[CNT_REJECTED] += 1
+    return flags | FLAG_NONFINITE, 0.1 * hh
+
+
+@jit_inline
+def hinit_norms(y, f, atol, aQ, rtol):
+    """``(dnf, dny)``: the squared scaled norms of ``f`` and ``y`` (Hairer's ``hinit``); ``y``
+    and ``f`` are the 8 components of one member."""
+    dnf = 0.0
+    dny = 0.0
+    for i in range(NDIM):
+        sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
+        dnf += (f[i] / sk) ** 2
+        dny += (y[i] / sk) ** 2
+    return dnf, dny
+
+
+@jit_inline
+def hinit_der2(y, f0, f1, atol, aQ, rtol):
+    """The squared scaled norm of ``f1 - f0`` (Hairer's second-derivative estimate)."""
+    der2 = 0.0
+    for i in range(NDIM):
+        sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
+        der2 += ((f1[i] - f0[i]) / sk) ** 2
+    return der2
+
+
+@jit_inline
 def failure(flags):
     """The status of a run whose step size underflowed."""
     return NONFINITE if (flags & FLAG_NONFINITE) != 0 else STEP_TOO_SMALL
+
+
+@jit_inline
+def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags):
+    """``(status, hh, landing)`` before a step attempt: :data:`DONE` to attempt the step ``hh``
+    (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``, step-size
+    underflow)."""
+    if attempts >= budget:
+        return PAUSED, 0.0, False
+    if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
+        return MAX_STEPS, 0.0, False
+    hh, landing = plan_step(t, h, max_step, t_next)
+    if hh <= 0.0 or (hh <= hmin and not landing):
+        return failure(flags), hh, landing
+    return DONE, hh, landing
 
 
 # ---------------------------------------------------------------------------------------
@@ -177,24 +223,15 @@ def failure(flags):
 def _initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol, atol, hmax):
     """Hairer's ``hinit`` (order 8): a first step from the sizes of ``y``, ``f`` and an
     estimate of the second derivative (one extra RHS evaluation)."""
-    dnf = 0.0
-    dny = 0.0
     aQ = atol * momentum_scale(inertia)
-    for i in range(NDIM):
-        sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
-        dnf += (f0[i] / sk) ** 2
-        dny += (y[i] / sk) ** 2
+    dnf, dny = hinit_norms(y, f0, atol, aQ, rtol)
     h = min(hinit_guess(dnf, dny), hmax)
     if not (h > 0.0 and h < np.inf):
         return h
     for i in range(NDIM):
         ytmp[i] = y[i] + h * f0[i]
     rhs(t + h, ytmp, inertia, terms, params, table, work, f1)
-    der2 = 0.0
-    for i in range(NDIM):
-        sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
-        der2 += ((f1[i] - f0[i]) / sk) ** 2
-    return min(100.0 * abs(h), hinit_refine(der2, dnf, h), hmax)
+    return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
 
 
 @jit
@@ -262,19 +299,12 @@ def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, par
     aQ = atol * momentum_scale(inertia)
     cap = rec_t.shape[0]
     while i_out < nout:
-        if attempts >= budget:
-            status = PAUSED
-            break
-        if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
-            status = MAX_STEPS
-            break
         if record_all and cnt[CNT_NREC] >= cap:
             status = BUFFER_FULL
             break
         t_next = t_out[i_out]
-        hh, landing = plan_step(t, h, max_step, t_next)
-        if hh <= 0.0 or (hh <= hmin and not landing):
-            status = failure(flags)
+        status, hh, landing = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags)
+        if status != DONE:
             break
         # --- the 12 stages
         for s in range(1, N_STAGES):
@@ -310,10 +340,8 @@ def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, par
         err = error_norm(e5, e3, hh)
         attempts += 1
         if not (err < np.inf):  # NaN or inf: shrink hard and retry
-            cnt[CNT_REJECTED] += 1
-            flags |= FLAG_NONFINITE
+            flags, h = reject_nonfinite(cnt, flags, hh)
             reject = True
-            h = 0.1 * hh
             continue
         fac11, hnew = controller(err, facold, hh)
         if err <= 1.0:
@@ -326,10 +354,8 @@ def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, par
                 if not (abs(K[N_STAGES, i]) < np.inf):
                     ok = False
             if not ok:
-                cnt[CNT_REJECTED] += 1
-                flags |= FLAG_NONFINITE
+                flags, h = reject_nonfinite(cnt, flags, hh)
                 reject = True
-                h = 0.1 * hh
                 continue
             flags &= ~FLAG_NONFINITE
             facold = max(err, 1.0e-4)

@@ -16,11 +16,11 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ._jit import (BAD_LANE_SHIFT, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_NONFINITE, FLAG_REJECTED, MAX_STEPS,
-                   NDIM, PAUSED, borrow, jit, jit_parallel, keepalive)
-from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_REJECTED, CNT_STEPS, ST_FACOLD, ST_H, ST_T, controller,
-                     error_norm, failure, hinit_guess, hinit_refine, momentum_scale, next_after_accept,
-                     next_after_reject, plan_step)
+from ._jit import (BAD_LANE_SHIFT, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_NONFINITE, FLAG_REJECTED, NDIM, borrow,
+                   jit, jit_parallel, keepalive)
+from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_REJECTED, CNT_STEPS, ST_FACOLD, ST_H, ST_T, begin_attempt,
+                     controller, error_norm, hinit_der2, hinit_guess, hinit_norms, hinit_refine, momentum_scale,
+                     next_after_accept, next_after_reject, reject_nonfinite)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES
 from .hamiltonian import rhs_lanes
 
@@ -85,12 +85,7 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
         hmax = min(max_step, t_out[nout - 1] - t)
         h = hmax
         for l in range(nl):
-            dnf = 0.0
-            dny = 0.0
-            for i in range(NDIM):
-                sk = (atol if i < 4 else aQ[l]) + rtol * abs(yg[i, l])
-                dnf += (K[0, i, l] / sk) ** 2
-                dny += (yg[i, l] / sk) ** 2
+            dnf, dny = hinit_norms(yg[:, l], K[0, :, l], atol, aQ[l], rtol)
             h = min(h, hinit_guess(dnf, dny))
         if h > 0.0 and h < np.inf:
             for l in range(nl):
@@ -101,12 +96,8 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
             h0 = h
             h = hmax
             for l in range(nl):
-                der2 = 0.0
-                dnf = 0.0
-                for i in range(NDIM):
-                    sk = (atol if i < 4 else aQ[l]) + rtol * abs(yg[i, l])
-                    der2 += ((K[1, i, l] - K[0, i, l]) / sk) ** 2
-                    dnf += (K[0, i, l] / sk) ** 2
+                der2 = hinit_der2(yg[:, l], K[0, :, l], K[1, :, l], atol, aQ[l], rtol)
+                dnf, _ = hinit_norms(yg[:, l], K[0, :, l], atol, aQ[l], rtol)
                 h = min(h, 100.0 * h0, hinit_refine(der2, dnf, h0))
         if not (h > 0.0 and h < np.inf):
             h = 1e-6 * max(1.0, abs(t_out[nout - 1] - t))
@@ -115,16 +106,9 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
     hmin = 10.0 * EPS * max(abs(t), abs(t_out[nout - 1]))
     bad_lane = -1
     while i_out < nout:
-        if attempts >= budget:
-            status = PAUSED
-            break
-        if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
-            status = MAX_STEPS
-            break
         t_next = t_out[i_out]
-        hh, landing = plan_step(t, h, max_step, t_next)
-        if hh <= 0.0 or (hh <= hmin and not landing):
-            status = failure(flags)
+        status, hh, landing = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags)
+        if status != DONE:
             break
         for s in range(1, N_STAGES):
             for i in range(NDIM):
@@ -170,10 +154,8 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
             err = max(err, el)
         attempts += 1
         if not (err < np.inf):
-            cnt[CNT_REJECTED] += 1
-            flags |= FLAG_NONFINITE
+            flags, h = reject_nonfinite(cnt, flags, hh)
             reject = True
-            h = 0.1 * hh
             continue
         fac11, hnew = controller(err, facold, hh)
         if err <= 1.0:
@@ -187,10 +169,8 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
                         ok = False
                         bad_lane = l
             if not ok:
-                cnt[CNT_REJECTED] += 1
-                flags |= FLAG_NONFINITE
+                flags, h = reject_nonfinite(cnt, flags, hh)
                 reject = True
-                h = 0.1 * hh
                 continue
             flags &= ~FLAG_NONFINITE
             facold = max(err, 1.0e-4)

@@ -274,6 +274,22 @@ def _rk4_step(y, t, h, inertia, terms, params, table, work, k1, k2, k3, k4, ytmp
 
 
 @jit_inline
+def plan_grid_step(t0, k, h, tk, tt, tol, max_steps, done_here, budget):
+    """``(status, full, step)``: the next step from the grid point ``tk = t0 + k h`` towards
+    the output time ``tt``: a full grid step, or the partial step to ``tt`` when ``tt`` falls
+    before the next grid point; status :data:`DONE` to go on, else why to stop."""
+    if done_here >= budget:
+        return PAUSED, False, 0.0
+    full = t0 + (k + 1) * h <= tt + tol
+    if full and k >= max_steps:
+        return MAX_STEPS, full, 0.0
+    step = h if full else tt - tk
+    if step <= 0.0:
+        return STEP_TOO_SMALL, full, step
+    return DONE, full, step
+
+
+@jit_inline
 def _finite(q, Q):
     s = q[0] + q[1] + q[2] + q[3] + Q[0] + Q[1] + Q[2] + Q[3]
     return abs(s) < np.inf
@@ -327,17 +343,8 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
             out_y[i_out, 4], out_y[i_out, 5], out_y[i_out, 6], out_y[i_out, 7] = Q
             i_out += 1
             continue
-        if done_here >= budget:
-            status = PAUSED
-            break
-        tk1 = t0 + (k + 1) * h
-        full = tk1 <= tt + tol
-        if full and k >= max_steps:
-            status = MAX_STEPS
-            break
-        step = h if full else tt - tk
-        if step <= 0.0:
-            status = STEP_TOO_SMALL
+        status, full, step = plan_grid_step(t0, k, h, tk, tt, tol, max_steps, done_here, budget)
+        if status != DONE:
             break
         if method == SPLITTING:
             qn, Qn, gcn, gvn, ne = _split_step(q, Q, tk, step, flow, weight, toff, axes, coef, inertia, terms,
@@ -499,17 +506,8 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
                     out_y[l, i_out, i] = yg[i, l]
             i_out += 1
             continue
-        if done_here >= budget:
-            status = PAUSED
-            break
-        tk1 = t0 + (k + 1) * h
-        full = tk1 <= tt + tol
-        if full and k >= max_steps:
-            status = MAX_STEPS
-            break
-        step = h if full else tt - tk
-        if step <= 0.0:
-            status = STEP_TOO_SMALL
+        status, full, step = plan_grid_step(t0, k, h, tk, tt, tol, max_steps, done_here, budget)
+        if status != DONE:
             break
         for i in range(NDIM):
             for l in range(nl):

@@ -40,7 +40,7 @@ import numpy as np
 from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError
-from ..orbits.base import parse_epoch
+from ..epoch import parse_epoch
 from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
 from ..methods import METHODS

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dataset import CONVENTIONS, FRAMES, REFERENCE, iso_epoch, open_dataset, orbatt_version, to_json, utc_now
+from ..dataset import global_attrs, open_dataset
 from ..errors import InputError, SweepError
 from .cases import Sweep, load_sweep
 from .chunk import add_stats, concat_cases, run_chunk
@@ -317,41 +317,17 @@ def sweep_global_attrs(ds, sweep, stats, run):
     them), the sweep's (:meth:`Sweep.attrs`), the summed ``stats`` and ``run`` (JSON).
     With trajectories, the pieces' own attributes are kept underneath."""
     sc = sweep.scenario
-    trajectory = "trajectory" in sweep.spec.outputs
-    attrs = {} if not trajectory else {k: v for k, v in ds.attrs.items()}
-    attrs.pop("sweep_chunk_seconds", None)
-    kw = dict(sc.settings)
-    settings = {"method": sc.method, **kw}
-    attrs.update({
-        "Conventions": CONVENTIONS,
-        "title": f"orbatt sweep: {sc.name} ({sweep.cases} cases)",
-        "source": f"orbatt {orbatt_version()}",
-        "references": REFERENCE,
-        "orbatt_version": orbatt_version(),
-        "method": str(sc.method),
-        "method_settings": to_json(settings),
-        "integration_stats": json.dumps(stats, sort_keys=True),
-        "integration_complete": np.int8(1),
-        "potential": to_json(sc.potential.describe()),
-        "unit_system": "dimensionless (angles in rad)" if sc.spec.dimensionless else "kg km s rad",
-        "frames": FRAMES,
-        "quaternion_order": "w x y z",
-        "scenario": sc.text,
-        "sweep_output_times": np.int64(sc.times.size),
-        "sweep_t_end": float(sc.times[-1]),
-    })
-    if sc.orbit is not None:
-        attrs["orbit"] = to_json(sc.orbit.describe())
-        ep = iso_epoch(sc.orbit.epoch)
-        if ep:
-            attrs["epoch"] = ep
-    elif "epoch" in attrs:
-        del attrs["epoch"]
-    attrs.update(sweep.attrs())
-    attrs["sweep_run"] = json.dumps(run, sort_keys=True)
-    now = utc_now()
-    attrs["date_created"] = now
-    attrs["history"] = f"{now} orbatt {orbatt_version()}: sweep of {sweep.cases} cases ({run.get('scheduler')})"
+    attrs = {}
+    if "trajectory" in sweep.spec.outputs:
+        attrs = {k: v for k, v in ds.attrs.items() if k not in ("sweep_chunk_seconds", "epoch")}
+    attrs.update(global_attrs(
+        method=sc.method, settings={"method": sc.method, **sc.settings}, stats=json.dumps(stats, sort_keys=True),
+        potential=sc.potential, dimensionless=sc.spec.dimensionless, orbit=sc.orbit,
+        epoch=None if sc.orbit is None else sc.orbit.epoch, scenario_text=sc.text,
+        title=f"orbatt sweep: {sc.name} ({sweep.cases} cases)",
+        action=f"sweep of {sweep.cases} cases ({run.get('scheduler')})",
+        sweep_output_times=np.int64(sc.times.size), sweep_t_end=float(sc.times[-1]), **sweep.attrs(),
+        sweep_run=json.dumps(run, sort_keys=True)))
     ds.attrs = attrs
     return ds
 

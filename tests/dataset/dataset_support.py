@@ -37,10 +37,11 @@ def _propagate(body, q0, Q0, potential, t, inertia=None):
         return orbatt.propagate(body, orbatt.State(body, q0, Q0), potential, t)
     inertia = body.inertia_value if inertia is None else inertia
     work = kp.new_work()
+    model = potential.kernel_model()
 
     def f(tt, y):
         dy = np.empty(8)
-        H.rhs(tt, y, inertia, potential.kind, potential.params, potential.table, work, dy)
+        H.rhs(tt, y, inertia, *model, work, dy)
         return dy
 
     sol = solve_ivp(f, (t[0], t[-1]), np.r_[q0, Q0], method="DOP853", t_eval=t, rtol=1e-12, atol=1e-12)

@@ -12,6 +12,7 @@ import orbatt
 from orbatt import analytic
 from orbatt import quaternion as qt
 from orbatt.core import dop853 as kd
+from orbatt.core import model as km
 from orbatt.core import kepler
 from orbatt.core import potentials as kp
 from orbatt.core import splitting as ks
@@ -130,8 +131,8 @@ def run_dop853(t_out, inertia=I_FREE, kind=0, params=NO_PARAMS, rtol=1e-10, atol
     work = kp.new_work()
     status = kd.PAUSED
     while status == kd.PAUSED:
-        status = kd.advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, inertia, kind,
-                            params, EMPTY, work, rtol, atol, max_step, 10**9, budget)
+        status = kd.advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, inertia,
+                            *km.from_spec(kind, params, EMPTY), work, rtol, atol, max_step, 10**9, budget)
     assert status == kd.DONE
     return out, cnt
 
@@ -148,6 +149,6 @@ def run_fixed(t_out, h, comp="strang", kinetic="axes", inertia=I_FREE, kind=0, p
     status = kd.PAUSED
     while status == kd.PAUSED:
         status = ks.advance(y, st, cnt, np.asarray(t_out, dtype=float), out, 0.0, h, method, flow, weight, toff, axes,
-                            coef, inertia, kind, params, EMPTY, work, 10**12, budget)
+                            coef, inertia, *km.from_spec(kind, params, EMPTY), work, 10**12, budget)
     assert status == kd.DONE
     return out, cnt

@@ -12,21 +12,23 @@ from method_cases import (EMPTY, GG, I_FREE, I_SAT, NO_PARAMS, PARAMS_GG, PARAMS
 import orbatt
 from orbatt import analytic
 from orbatt.core import dop853 as kd
+from orbatt.core import dop853_coefficients as dc
+from orbatt.core import model as km
 from orbatt.core import potentials as kp
 
 def test_dop853_tableau_is_consistent():
     # rows of A sum to the nodes, weights to 1, error estimators to 0
-    np.testing.assert_allclose(kd.A.sum(axis=1), kd.C, atol=1e-14)
-    assert kd.B.sum() == pytest.approx(1.0, abs=1e-14)
-    assert abs(kd.E5.sum()) < 1e-14 and abs(kd.E3.sum()) < 1e-14
+    np.testing.assert_allclose(dc.A.sum(axis=1), dc.C, atol=1e-14)
+    assert dc.B.sum() == pytest.approx(1.0, abs=1e-14)
+    assert abs(dc.E5.sum()) < 1e-14 and abs(dc.E3.sum()) < 1e-14
     # quadrature conditions of order 8: sum b_i c_i^k = 1 / (k + 1)
     for k in range(8):
-        assert (kd.B * kd.C**k).sum() == pytest.approx(1.0 / (k + 1), abs=1e-13)
+        assert (dc.B * dc.C**k).sum() == pytest.approx(1.0 / (k + 1), abs=1e-13)
     # the sparse copy of A used by the stage loop
-    for s in range(kd.N_STAGES):
-        row = np.zeros(kd.N_STAGES)
-        row[kd.A_COL[kd.A_PTR[s]:kd.A_PTR[s + 1]]] = kd.A_VAL[kd.A_PTR[s]:kd.A_PTR[s + 1]]
-        np.testing.assert_array_equal(row, kd.A[s])
+    for s in range(dc.N_STAGES):
+        row = np.zeros(dc.N_STAGES)
+        row[dc.A_COL[dc.A_PTR[s]:dc.A_PTR[s + 1]]] = dc.A_VAL[dc.A_PTR[s]:dc.A_PTR[s + 1]]
+        np.testing.assert_array_equal(row, dc.A[s])
 
 
 # ---------------------------------------------------------------------------------------
@@ -102,7 +104,7 @@ def test_dop853_kernel_reports_a_nonfinite_state():
     y = Y0.copy()
     st, cnt, f0 = kd.new_state()
     out = np.zeros((1, 8))
-    status = kd.advance(y, st, cnt, f0, np.array([10.0]), np.empty(0), out, False, I_FREE, kp.HEAVY_TOP, bad, EMPTY,
+    status = kd.advance(y, st, cnt, f0, np.array([10.0]), np.empty(0), out, False, I_FREE, *km.from_spec(kp.HEAVY_TOP, bad, EMPTY),
                         kp.new_work(), 1e-8, 1e-10, np.inf, 10**6, 10**6)
     assert status == kd.NONFINITE
     np.testing.assert_array_equal(y, Y0)
@@ -114,7 +116,7 @@ def test_dop853_refuses_to_crawl():
     y = Y0.copy()
     st, cnt, f0 = kd.new_state()
     status = kd.advance(y, st, cnt, f0, np.array([10.0]), np.empty(0), np.zeros((1, 8)), False, I_FREE,
-                        kp.HEAVY_TOP, np.array([1e300, 1.0, 0.0, 0.0]), EMPTY, kp.new_work(), 1e-8, 1e-10, np.inf,
+                        *km.from_spec(kp.HEAVY_TOP, np.array([1e300, 1.0, 0.0, 0.0]), EMPTY), kp.new_work(), 1e-8, 1e-10, np.inf,
                         10**6, 10**6)
     assert status in (kd.NONFINITE, kd.STEP_TOO_SMALL)
     assert cnt[kd.CNT_STEPS] + cnt[kd.CNT_REJECTED] < 10_000
@@ -129,20 +131,23 @@ def test_dop853_refuses_to_crawl():
                                                  (kp.GRAVITY_GRADIENT_KEPLER, I_SAT, PARAMS_GG)])
 def test_lane_rhs_equals_rhs(kind, inertia, params):
     """The vectorized group right-hand side performs the operations of hamiltonian.rhs."""
-    from orbatt.core.hamiltonian import rhs
+    from orbatt.core.hamiltonian import rhs, rhs_lanes
 
     rng = np.random.default_rng(kind)
     L = 13
     Y = rng.normal(size=(8, L))
     I = np.tile(inertia[:, None], (1, L)) * rng.uniform(0.9, 1.1, size=(3, L))
     dY = np.empty((8, L))
+    G = np.empty((4, L))
     work = kp.new_work()
+    model = km.from_spec(kind, params, EMPTY)
     for t in (0.0, 1234.5, 1300.0):
-        kd.rhs_lanes(t, Y, L, I, kind, params, EMPTY, work, dY)
+        rhs_lanes(t, Y, L, I, *model, work, G, dY)
         for l in range(L):
             dy = np.empty(8)
-            rhs(t, np.ascontiguousarray(Y[:, l]), np.ascontiguousarray(I[:, l]), kind, params, EMPTY, kp.new_work(), dy)
-            np.testing.assert_allclose(dY[:, l], dy, rtol=1e-14, atol=1e-300)
+            rhs(t, np.ascontiguousarray(Y[:, l]), np.ascontiguousarray(I[:, l]), *model, kp.new_work(), dy)
+            # the same operations member by member: bitwise
+            np.testing.assert_array_equal(dY[:, l], dy)
 
 
 def test_dop853_lanes_agrees_with_one_by_one_to_tolerance(sat):

@@ -14,6 +14,7 @@ import orbatt
 from orbatt import analytic
 from orbatt import quaternion as qt
 from orbatt.core import dop853 as kd
+from orbatt.core import model as km
 from orbatt.core import potentials as kp
 from orbatt.core import splitting as ks
 from orbatt.core.hamiltonian import energy
@@ -186,7 +187,8 @@ def test_splitting_keeps_constraints_over_1e7_steps():
 
 
 def _energy_error(out, inertia, kind, params):
-    H = np.array([energy(0.0, y, inertia, kind, params, EMPTY, kp.new_work()) for y in out])
+    model = km.from_spec(kind, params, EMPTY)
+    H = np.array([energy(0.0, y, inertia, *model, kp.new_work()) for y in out])
     return np.abs(H - H[0]) / abs(H[0])
 
 
@@ -248,7 +250,7 @@ def test_splitting_kernel_reports_a_nonfinite_state():
     y = Y0.copy()
     st, cnt = ks.new_state()
     status = ks.advance(y, st, cnt, np.array([0.0, 10.0]), np.zeros((2, 8)), 0.0, 0.1, ks.SPLITTING, flow, weight,
-                        toff, axes, coef, I_FREE, kp.HEAVY_TOP, bad, EMPTY, kp.new_work(), 10**6, 10**6)
+                        toff, axes, coef, I_FREE, *km.from_spec(kp.HEAVY_TOP, bad, EMPTY), kp.new_work(), 10**6, 10**6)
     assert status == kd.NONFINITE
     np.testing.assert_array_equal(y, Y0)
 
