@@ -50,14 +50,14 @@ def rhs(t, y, inertia, terms, params, table, work, dy):
 
 
 @jit_inline
-def _lanes_one_term(kind, c, Y, nl, I, dY):
+def _lanes_one_term(kind, p0, c, Y, nl, I, params, dY):
     """Eq. (7) with a single term of ``kind`` (constants ``c``) over the lanes, in one fused
     loop (with a constant ``kind`` the term's dispatch folds away and the loop vectorizes)."""
     for l in range(nl):
         q = (Y[0, l], Y[1, l], Y[2, l], Y[3, l])
         inertia = (I[0, l], I[1, l], I[2, l])
         qd, Qd = eq7(q, (Y[4, l], Y[5, l], Y[6, l], Y[7, l]), inertia)
-        _, g = term_value(kind, c, q, inertia)
+        _, g = term_value(kind, p0, c, q, inertia, params)
         for k in range(4):
             dY[k, l] = 0.25 * qd[k]
             dY[4 + k, l] = 0.25 * Qd[k] - g[k]
@@ -84,18 +84,18 @@ def rhs_lanes(t, Y, nl, I, terms, params, table, work, G, dY):
                 dY[k, l] = 0.25 * qd[k]
                 dY[4 + k, l] = 0.25 * Qd[k] - 0.0
         return
-    r, xhat = orbit_radial(t, terms, params, table, work)
+    r, xhat, v = orbit_radial(t, terms, params, table, work)
     if n == 2:
-        kind, c = term_constants(1, terms, params, r, xhat)
+        kind, p0, c = term_constants(1, terms, params, r, xhat, v)
         # the specializations (the formulas stay in orbatt.core.model.term_value)
         if kind == GRAVITY_GRADIENT:
-            _lanes_one_term(GRAVITY_GRADIENT, c, Y, nl, I, dY)
+            _lanes_one_term(GRAVITY_GRADIENT, p0, c, Y, nl, I, params, dY)
         elif kind == HEAVY_TOP:
-            _lanes_one_term(HEAVY_TOP, c, Y, nl, I, dY)
+            _lanes_one_term(HEAVY_TOP, p0, c, Y, nl, I, params, dY)
         else:
-            _lanes_one_term(kind, c, Y, nl, I, dY)
+            _lanes_one_term(kind, p0, c, Y, nl, I, params, dY)
         return
-    terms_lanes(Y, nl, I, terms, params, r, xhat, G)
+    terms_lanes(Y, nl, I, terms, params, r, xhat, v, G)
     for l in range(nl):
         qd, Qd = eq7((Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (Y[4, l], Y[5, l], Y[6, l], Y[7, l]),
                      (I[0, l], I[1, l], I[2, l]))

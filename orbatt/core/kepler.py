@@ -234,6 +234,30 @@ def kepler_radial(t, orb, work):
 
 
 @jit
+def kepler_state(t, orb, work):
+    """Radius, radial unit vector and velocity (inertial components) at time ``t``.
+
+    Returns ``(r, xhat, v)``: ``r`` and ``xhat`` exactly as :func:`kepler_radial` (the same
+    operations), and ``v = n a^2 / r (-sin E P + sqrt(1 - e^2) cos E Q)`` (length unit of
+    ``a`` per time unit; ``n a^2 = sqrt(GM a)``).
+    """
+    a = orb[0]
+    e = orb[1]
+    P, Q, sq, ome = _perifocal(orb)
+    _, s, c, _ = _solve(orb[5] + orb[6] * t, e, work)
+    omc = _one_minus_cos(s, c)
+    rr = ome + e * omc  # 1 - e cos E
+    cf = (ome - omc) / rr  # cos f
+    sf = sq * s / rr  # sin f
+    r = a * rr
+    vfac = orb[6] * a * a
+    vs = -vfac * s / r
+    vc = vfac * sq * c / r
+    return (r, (cf * P[0] + sf * Q[0], cf * P[1] + sf * Q[1], cf * P[2] + sf * Q[2]),
+            (vs * P[0] + vc * Q[0], vs * P[1] + vc * Q[1], vs * P[2] + vc * Q[2]))
+
+
+@jit
 def kepler_many(t, orb, gm):
     """The Keplerian orbit at the times ``t`` (array, any order; warm-started in sequence).
 

@@ -10,9 +10,10 @@ A model is three plain arrays (in the caller's consistent unit system), built by
 :func:`build` from Python:
 
 ``terms`` : int64 ``(1 + n_terms, TERM_FIELDS)``
-    Row 0 is the **orbit** the terms may read: ``[orbit kind, p0, p1, r0, r1]``; rows
-    ``1..n`` are the **terms** ``[term kind, p0, p1, r0, r1]``. ``params[p0:p1]`` are the
-    row's parameters and ``table[r0:r1]`` its table rows.
+    Row 0 is the **orbit** the terms may read: ``[orbit kind, p0, p1, r0, r1, flags]``
+    (``flags``: :data:`NEEDS_VELOCITY`); rows ``1..n`` are the **terms** ``[term kind, p0,
+    p1, r0, r1, 0]``. ``params[p0:p1]`` are the row's parameters and ``table[r0:r1]`` its
+    table rows.
 ``params`` : float64 ``(P,)``
     Every row's parameters, concatenated.
 ``table`` : float64 ``(R, C)``
@@ -33,6 +34,9 @@ term kind              code  params
 heavy top (eq. 18)     1     ``[s Mg, xc1, xc2, xc3]`` (:func:`orbatt.core.potentials.heavy_top`)
 gravity gradient       2     ``[GM]``; reads the orbit's ``r`` and radial unit vector
 (eq. 20)                     (:func:`orbatt.core.potentials.gravity_gradient`)
+aerodynamic drag       3     :func:`drag_params`: an exponential atmosphere, its rotation rate and
+of flat plates               the facets of :mod:`orbatt.core.torques`; reads the orbit's position
+                             and velocity (a torque: ``G = -2 q (0, tau)``)
 =====================  ====  =====================================================================
 
 Every term contributes ``(U, G)``: its potential and its generalized gradient, so that the
@@ -48,10 +52,13 @@ from __future__ import annotations
 
 import numpy as np
 
+import math
+
 from ._jit import jit, jit_inline
 from . import potentials as pot
-from .kepler import ORB_SIZE, kepler_radial
-from .sampled import TABLE_COLUMNS, sampled_radial
+from . import torques as trq
+from .kepler import ORB_SIZE, kepler_radial, kepler_state
+from .sampled import TABLE_COLUMNS, sampled_radial, sampled_state
 
 # orbit kinds (row 0)
 ORBIT_NONE = 0
@@ -60,13 +67,19 @@ ORBIT_SAMPLED = 2
 # term kinds (rows 1..n)
 HEAVY_TOP = 1
 GRAVITY_GRADIENT = 2
+DRAG = 3
 
 #: columns of a ``terms`` row
-KIND, P0, P1, R0, R1 = 0, 1, 2, 3, 4
-TERM_FIELDS = 5
+KIND, P0, P1, R0, R1, FLAGS = 0, 1, 2, 3, 4, 5
+TERM_FIELDS = 6
+#: row 0 ``FLAGS`` bit: a term reads the orbit's velocity
+NEEDS_VELOCITY = 1
 
-#: terms that read the orbit
-ORBIT_TERMS = frozenset({GRAVITY_GRADIENT})
+#: terms that read the orbit, and those that read its velocity
+ORBIT_TERMS = frozenset({GRAVITY_GRADIENT, DRAG})
+VELOCITY_TERMS = frozenset({DRAG})
+#: parameters of a drag term before its facets: ``[rho0, h0, H, R_eq, omega, nfacets]``
+DRAG_HEADER = 6
 
 
 # ---------------------------------------------------------------------------------------
@@ -75,51 +88,81 @@ ORBIT_TERMS = frozenset({GRAVITY_GRADIENT})
 
 @jit_inline
 def orbit_radial(t, terms, params, table, work):
-    """Radius and radial unit vector (inertial components) of the model's orbit at ``t``;
-    ``(1, (1, 0, 0))`` when the model has no orbit."""
+    """``(r, xhat, v)``: radius, radial unit vector and velocity (inertial components) of the
+    model's orbit at ``t``. The velocity is computed only when a term reads it (row 0's
+    :data:`NEEDS_VELOCITY` flag; else zero), and ``r``, ``xhat`` are the same numbers either
+    way; ``(1, (1, 0, 0), 0)`` when the model has no orbit."""
     kind = terms[0, KIND]
-    if kind == ORBIT_KEPLER:
-        return kepler_radial(t, params[terms[0, P0]:terms[0, P1]], work)
+    if (terms[0, FLAGS] & NEEDS_VELOCITY) != 0:
+        if kind == ORBIT_KEPLER:
+            return kepler_state(t, params[terms[0, P0]:terms[0, P1]], work)
+        elif kind == ORBIT_SAMPLED:
+            return sampled_state(t, table[terms[0, R0]:terms[0, R1]], work)
+    elif kind == ORBIT_KEPLER:
+        r, xhat = kepler_radial(t, params[terms[0, P0]:terms[0, P1]], work)
+        return r, xhat, (0.0, 0.0, 0.0)
     elif kind == ORBIT_SAMPLED:
-        return sampled_radial(t, table[terms[0, R0]:terms[0, R1]], work)
-    return 1.0, (1.0, 0.0, 0.0)
+        r, xhat = sampled_radial(t, table[terms[0, R0]:terms[0, R1]], work)
+        return r, xhat, (0.0, 0.0, 0.0)
+    return 1.0, (1.0, 0.0, 0.0), (0.0, 0.0, 0.0)
 
 
 @jit_inline
-def term_constants(j, terms, params, r, xhat):
-    """``(kind, c)``: the kind of term row ``j`` and the four constants it needs at one time
-    (read once per evaluation, outside any loop over members: gravity gradient
-    ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``)."""
+def _drag_constants(params, p0, r, xhat, v):
+    """``(1/2 rho |v_rel|^2, v_rel / |v_rel|)`` of a drag term: exponential density
+    ``rho0 exp(-(h - h0) / H)``, ``h = r - R_eq``; ``v_rel = v - omega s3 x r``."""
+    rho = params[p0] * math.exp(-((r - params[p0 + 3]) - params[p0 + 1]) / params[p0 + 2])
+    w = params[p0 + 4]
+    vx = v[0] + w * r * xhat[1]
+    vy = v[1] - w * r * xhat[0]
+    vz = v[2]
+    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if speed == 0.0:
+        return (0.0, 1.0, 0.0, 0.0)
+    return (0.5 * rho * speed * speed, vx / speed, vy / speed, vz / speed)
+
+
+@jit_inline
+def term_constants(j, terms, params, r, xhat, v):
+    """``(kind, p0, c)``: the kind of term row ``j``, the start of its parameters and the four
+    constants it needs at one time (read once per evaluation, outside any loop over members:
+    gravity gradient ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``, drag
+    ``(1/2 rho |v|^2, v^)``)."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
     if kind == GRAVITY_GRADIENT:
-        return kind, (params[p0] / (r * r * r), xhat[0], xhat[1], xhat[2])
+        return kind, p0, (params[p0] / (r * r * r), xhat[0], xhat[1], xhat[2])
     elif kind == HEAVY_TOP:
-        return kind, (params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
-    return kind, (0.0, 0.0, 0.0, 0.0)
+        return kind, p0, (params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
+    elif kind == DRAG:
+        return kind, p0, _drag_constants(params, p0, r, xhat, v)
+    return kind, p0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit_inline
-def term_value(kind, c, q, inertia):
-    """``(U, G)`` of a term of ``kind`` with constants ``c`` (:func:`term_constants`) at the
-    attitude ``q`` (4-tuple) of a body of principal moments ``inertia``. The one dispatch on
-    term kinds."""
+def term_value(kind, p0, c, q, inertia, params):
+    """``(U, G)`` of a term of ``kind`` with constants ``c`` (:func:`term_constants`) and
+    parameters from ``params[p0]`` at the attitude ``q`` (4-tuple) of a body of principal
+    moments ``inertia``. The one dispatch on term kinds."""
     if kind == GRAVITY_GRADIENT:
         return pot.gravity_gradient(q, inertia, c[0], (c[1], c[2], c[3]))
     elif kind == HEAVY_TOP:
         return pot.heavy_top(q, c)
+    elif kind == DRAG:
+        tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 5]))
+        return 0.0, trq.gradient_of_torque(q, tau)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit_inline
-def terms_at(q, inertia, terms, params, r, xhat):
+def terms_at(q, inertia, terms, params, r, xhat, v):
     """``(U, G)`` summed over the terms (rows ``1..n``) at the attitude ``q`` (4-tuple), the
-    orbit's ``r`` and ``xhat`` given; starts from the first term's value."""
-    kind, c = term_constants(1, terms, params, r, xhat)
-    U, G = term_value(kind, c, q, inertia)
+    orbit's ``r``, ``xhat`` and ``v`` given; starts from the first term's value."""
+    kind, p0, c = term_constants(1, terms, params, r, xhat, v)
+    U, G = term_value(kind, p0, c, q, inertia, params)
     for j in range(2, terms.shape[0]):
-        kind, c = term_constants(j, terms, params, r, xhat)
-        u, g = term_value(kind, c, q, inertia)
+        kind, p0, c = term_constants(j, terms, params, r, xhat, v)
+        u, g = term_value(kind, p0, c, q, inertia, params)
         U += u
         G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
     return U, G
@@ -130,21 +173,23 @@ def gradient(t, q, inertia, terms, params, table, work):
     """``(U, G)``: the total potential and generalized gradient of all terms at time ``t`` and
     attitude ``q`` (4-tuple); ``(0, 0)`` for an empty model."""
     if terms.shape[0] > 1:
-        r, xhat = orbit_radial(t, terms, params, table, work)
-        return terms_at(q, inertia, terms, params, r, xhat)
+        r, xhat, v = orbit_radial(t, terms, params, table, work)
+        return terms_at(q, inertia, terms, params, r, xhat, v)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit_inline
-def _term_lanes(kind, c, Y, nl, I, G, first):
+def _term_lanes(kind, p0, c, Y, nl, I, params, G, first):
     """One term over the lanes into ``G`` (``first``: assign, else add)."""
     if first:
         for l in range(nl):
-            _, g = term_value(kind, c, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]))
+            _, g = term_value(kind, p0, c, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]),
+                              params)
             G[0, l], G[1, l], G[2, l], G[3, l] = g
     else:
         for l in range(nl):
-            _, g = term_value(kind, c, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]))
+            _, g = term_value(kind, p0, c, (Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (I[0, l], I[1, l], I[2, l]),
+                              params)
             G[0, l] += g[0]
             G[1, l] += g[1]
             G[2, l] += g[2]
@@ -152,21 +197,21 @@ def _term_lanes(kind, c, Y, nl, I, G, first):
 
 
 @jit_inline
-def terms_lanes(Y, nl, I, terms, params, r, xhat, G):
+def terms_lanes(Y, nl, I, terms, params, r, xhat, v, G):
     """:func:`terms_at` for lanes ``0..nl-1`` of ``Y (8, L)`` (inertia ``I (3, L)``) into
     ``G (4, L)``, the same sums in the same order as one member. One loop over the lanes per
     term, specialized to the term's kind (a constant kind makes :func:`term_value`'s
     dispatch fold away, so that LLVM vectorizes the loop: it does not unswitch a loop on a
     run-time kind); kinds without a specialization take the generic loop."""
     for j in range(1, terms.shape[0]):
-        kind, c = term_constants(j, terms, params, r, xhat)
+        kind, p0, c = term_constants(j, terms, params, r, xhat, v)
         first = j == 1
         if kind == GRAVITY_GRADIENT:
-            _term_lanes(GRAVITY_GRADIENT, c, Y, nl, I, G, first)
+            _term_lanes(GRAVITY_GRADIENT, p0, c, Y, nl, I, params, G, first)
         elif kind == HEAVY_TOP:
-            _term_lanes(HEAVY_TOP, c, Y, nl, I, G, first)
+            _term_lanes(HEAVY_TOP, p0, c, Y, nl, I, params, G, first)
         else:
-            _term_lanes(kind, c, Y, nl, I, G, first)
+            _term_lanes(kind, p0, c, Y, nl, I, params, G, first)
 
 
 @jit_inline
@@ -176,9 +221,34 @@ def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
     False (``G`` untouched) for an empty model."""
     if terms.shape[0] <= 1:
         return False
-    r, xhat = orbit_radial(t, terms, params, table, work)
-    terms_lanes(Y, nl, I, terms, params, r, xhat, G)
+    r, xhat, v = orbit_radial(t, terms, params, table, work)
+    terms_lanes(Y, nl, I, terms, params, r, xhat, v, G)
     return True
+
+
+@jit
+def evaluate_terms(t, q, inertia, terms, params, table, work):
+    """Each term alone: ``U (N, n)`` and the body torque ``tau (N, n, 3)`` of the ``n`` terms
+    at the times ``t (N,)`` and attitudes ``q (N, 4)`` (for the per-term outputs of a
+    result; ``tau = -1/2 Im(q~ G)``)."""
+    n = q.shape[0]
+    nt = terms.shape[0] - 1
+    U = np.zeros((n, nt))
+    tau = np.zeros((n, nt, 3))
+    inertia_t = (inertia[0], inertia[1], inertia[2])
+    if nt == 0:
+        return U, tau
+    for i in range(n):
+        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
+        for j in range(1, nt + 1):
+            kind, p0, c = term_constants(j, terms, params, r, xhat, v)
+            u, g = term_value(kind, p0, c, qi, inertia_t, params)
+            U[i, j - 1] = u
+            tq = pot.torque_from_gradient(qi, g)
+            for k in range(3):
+                tau[i, j - 1, k] = tq[k]
+    return U, tau
 
 
 @jit
@@ -231,18 +301,33 @@ def build(orbit=None, terms=()):
         tab = np.zeros((0, 0)) if tab is None else np.asarray(tab, dtype=np.float64)
         if tab.ndim != 2:
             raise ValueError(f"model row {k}: the table must be 2-D, got shape {tab.shape}")
-        spec[k] = (int(kind), p, p + par.size, r, r + tab.shape[0])
+        spec[k, :R1 + 1] = (int(kind), p, p + par.size, r, r + tab.shape[0])
         plist.append(par)
         tlist.append(tab)
         p += par.size
         r += tab.shape[0]
     width = max((t.shape[1] for t in tlist), default=0)
     table = np.zeros((r, width))
-    for (_, _, _, r0, r1), tab in zip(spec, tlist):
+    for (_, _, _, r0, r1, _), tab in zip(spec, tlist):
         if r1 > r0:
             table[r0:r1, :tab.shape[1]] = tab
     params = np.concatenate(plist) if p else np.zeros(1)
+    kinds = {int(k) for k in spec[1:, KIND]}
+    if kinds & ORBIT_TERMS and spec[0, KIND] == ORBIT_NONE:
+        raise ValueError("a term that reads the orbit needs an orbit (row 0)")
+    if kinds & VELOCITY_TERMS:
+        spec[0, FLAGS] |= NEEDS_VELOCITY
     return spec, params, table
+
+
+def drag_params(facets, density0, altitude0, scale_height, body_radius, omega):
+    """The parameters of a :data:`DRAG` term: the exponential atmosphere ``density0 exp(-(h -
+    altitude0) / scale_height)``, ``h = r - body_radius``, turning at the rate ``omega``
+    (rad per time unit about inertial axis 3; 0: a still atmosphere), and the facets
+    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). Units: the
+    caller's consistent system (orbatt: kg, km, s; density in kg km^-3)."""
+    facets = np.asarray(facets, dtype=np.float64).reshape(-1, trq.FACET_SIZE)
+    return np.concatenate([[density0, altitude0, scale_height, body_radius, omega, facets.shape[0]], facets.ravel()])
 
 
 def from_spec(kind, params, table):

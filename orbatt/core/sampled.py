@@ -138,6 +138,23 @@ def sampled_radial(t, table, work):
 
 
 @jit
+def sampled_state(t, table, work):
+    """Radius, radial unit vector and velocity (inertial components) of a sampled orbit at
+    ``t``: ``(r, xhat, v)``, ``r`` and ``xhat`` exactly as :func:`sampled_radial`."""
+    i = find_interval(table, t, work)
+    h = table[i + 1, 0] - table[i, 0]
+    s = (t - table[i, 0]) / h
+    B = _basis(s)
+    x = _combine(table, i, B, h, 0)
+    y = _combine(table, i, B, h, 1)
+    z = _combine(table, i, B, h, 2)
+    r = math.sqrt(x * x + y * y + z * z)
+    D = _dbasis(s)
+    return (r, (x / r, y / r, z / r),
+            (_combine(table, i, D, h, 0) / h, _combine(table, i, D, h, 1) / h, _combine(table, i, D, h, 2) / h))
+
+
+@jit
 def sampled_many(t, table):
     """Position, velocity and acceleration ``(N, 3)`` each, interpolated at the times
     ``t`` (array; derivatives of the quintic Hermite polynomial)."""

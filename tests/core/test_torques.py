@@ -1,0 +1,123 @@
+"""Flat-plate drag and SRP, and the magnetic torque, at single instants against independent
+evaluations written here (DESIGN.md §10); drag as a term of the model."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from orbatt import quaternion as qt
+from orbatt.core import hamiltonian as H
+from orbatt.core import kepler
+from orbatt.core import model as km
+from orbatt.core import potentials as kp
+from orbatt.core import torques as trq
+
+rng = np.random.default_rng(11)
+
+
+def _facets(n=6):
+    """A box-like body: six plates with random areas, offsets and reflectivities."""
+    normals = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)[:n]
+    F = np.zeros((n, trq.FACET_SIZE))
+    F[:, 0] = rng.uniform(0.01, 0.1, n)
+    F[:, 1:4] = normals
+    F[:, 4:7] = normals * 0.15 + rng.normal(scale=0.02, size=(n, 3))
+    F[:, 7] = rng.uniform(0, 0.5, n)
+    F[:, 8] = rng.uniform(0, 0.4, n)
+    return F
+
+
+def _drag_reference(q, k, vhat_s, F):
+    v = qt.rotate_inv(q, vhat_s)
+    tau = np.zeros(3)
+    for f in F:
+        c = max(0.0, f[1:4] @ v)
+        force = -k * f[0] * c * v
+        tau += np.cross(f[4:7], force)
+    return tau
+
+
+def _srp_reference(q, P, shat_s, F):
+    s = qt.rotate_inv(q, shat_s)
+    tau = np.zeros(3)
+    for f in F:
+        n = f[1:4]
+        c = n @ s
+        if c <= 0:
+            continue
+        force = -P * f[0] * c * ((1 - f[7]) * s + 2 * (f[7] * c + f[8] / 3) * n)
+        tau += np.cross(f[4:7], force)
+    return tau
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_facet_torques_match_the_flat_plate_formulas(seed):
+    r = np.random.default_rng(seed)
+    F = _facets()
+    q = qt.normalize(r.normal(size=4))
+    d = qt.normalize(np.r_[0.0, r.normal(size=3)])[1:]
+    k = 0.5 * 3e-3 * 7.6**2
+    tau = np.array(trq.facet_drag(tuple(q), k, tuple(d), F.ravel(), 0, F.shape[0]))
+    np.testing.assert_allclose(tau, _drag_reference(q, k, d, F), rtol=1e-13, atol=1e-30)
+    tau = np.array(trq.facet_srp(tuple(q), 4.5e-6, tuple(d), F.ravel(), 0, F.shape[0]))
+    np.testing.assert_allclose(tau, _srp_reference(q, 4.5e-6, d, F), rtol=1e-13, atol=1e-30)
+    m = r.normal(size=3)
+    b = r.normal(size=3) * 3e-5
+    tau = np.array(trq.dipole_torque(tuple(q), tuple(m), tuple(b)))
+    np.testing.assert_allclose(tau, np.cross(m, qt.rotate_inv(q, b)), rtol=1e-13, atol=1e-30)
+
+
+def test_torque_enters_as_a_tangent_generalized_gradient():
+    q = qt.normalize(rng.normal(size=4))
+    tau = rng.normal(size=3)
+    G = np.array(trq.gradient_of_torque(tuple(q), tuple(tau)))
+    assert abs(G @ q) < 1e-15
+    np.testing.assert_allclose(kp.torque_from_gradient(tuple(q), tuple(G)), tau, rtol=1e-14, atol=1e-15)
+
+
+GM = 398600.4418
+ORB = kepler.orbit_vector(6778.0, 0.001, 0.9, 0.3, 0.2, 0.1, np.sqrt(GM / 6778.0**3))
+
+
+def test_drag_term_of_the_model():
+    """The model's drag term: exponential density at h = r - R_eq, velocity relative to the
+    co-rotating atmosphere, the flat-plate torque; Kepler velocity against kepler_many."""
+    F = _facets()
+    rho0, h0, Hs, Req, wE = 3e-3, 400.0, 60.0, 6378.137, 7.2921159e-5
+    model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
+                     terms=[(km.DRAG, km.drag_params(F, rho0, h0, Hs, Req, wE), None)])
+    assert model[0][0, km.FLAGS] & km.NEEDS_VELOCITY
+    t = np.array([0.0, 100.0, 2500.0])
+    q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
+    U, tau = km.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
+    assert np.all(U == 0.0)
+    _, _, r, pos, vel = kepler.kepler_many(t, ORB, GM)
+    for i in range(t.size):
+        vrel = vel[i] - np.cross([0, 0, wE], pos[i])
+        rho = rho0 * np.exp(-((r[i] - Req) - h0) / Hs)
+        k = 0.5 * rho * vrel @ vrel
+        ref = _drag_reference(q[i], k, vrel / np.linalg.norm(vrel), F)
+        np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-11)
+
+
+def test_kepler_and_sampled_state_keep_the_radial_numbers():
+    work1, work2 = kp.new_work(), kp.new_work()
+    for t in (0.0, 10.0, 3000.0):
+        r1, x1 = kepler.kepler_radial(t, ORB, work1)
+        r2, x2, v = kepler.kepler_state(t, ORB, work2)
+        assert r1 == r2 and x1 == x2
+        _, _, _, _, vel = kepler.kepler_many(np.array([t]), ORB, GM)
+        np.testing.assert_allclose(v, vel[0], rtol=1e-13)
+
+
+def test_drag_with_gravity_gradient_in_the_step_loop():
+    """A model of two terms through the compiled RHS: q.Q stays 0 and |q| = 1 (tangent)."""
+    F = _facets()
+    model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
+                     terms=[(km.GRAVITY_GRADIENT, [GM], None),
+                            (km.DRAG, km.drag_params(F, 3e-3, 400.0, 60.0, 6378.137, 7.29e-5), None)])
+    y = np.r_[qt.normalize(rng.normal(size=4)), np.zeros(4)]
+    dy = np.empty(8)
+    H.rhs(50.0, y, np.array([1e-5, 2e-5, 3e-5]), *model, kp.new_work(), dy)
+    assert np.abs(dy[4:]).max() > 0.0
+    assert abs(y[:4] @ dy[4:] + y[4:] @ dy[:4]) < 1e-14 * np.abs(dy[4:]).max()
