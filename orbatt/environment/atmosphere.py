@@ -19,13 +19,11 @@ from astropy import units as u
 
 from .. import units as U
 from ..errors import InputError
-from .frames import as_time_array, as_vectors, geodetic
+from .frames import R_EARTH_WGS84, as_time_array, as_vectors, geodetic
 
 __all__ = ["ExponentialAtmosphere", "PiecewiseExponentialAtmosphere", "NRLMSIS", "R_EARTH_WGS84",
            "VALLADO_TABLE"]
 
-#: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential models
-R_EARTH_WGS84 = 6378.137
 DENSITY = u.kg / u.m**3
 
 #: Vallado, *Fundamentals of Astrodynamics and Applications*, 4th ed. (2013), Table 8-4

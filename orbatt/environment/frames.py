@@ -26,8 +26,11 @@ from astropy import units as u
 from ..errors import InputError
 
 __all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "gcrs_to_itrs",
-           "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE"]
+           "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84"]
 
+#: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
+#: and the default occulting body of the shadow function
+R_EARTH_WGS84 = 6378.137
 #: Earth's mean rotation rate (rad/s) relative to the inertial frame (IERS Conventions 2010,
 #: the value of the WGS84/GRS80 ``omega``), for a co-rotating atmosphere ``omega_E x r``.
 EARTH_ROTATION_RATE = 7.292115e-5
