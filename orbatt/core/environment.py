@@ -82,11 +82,25 @@ def shadow_conical(r_sat, r_sun, R_body, R_sun):
         return 0.0
     if c <= a - b:              # the body's disc inside the Sun's (annular)
         return 1.0 - (b * b) / (a * a)
-    x = (c * c + a * a - b * b) / (2.0 * c)
-    y = math.sqrt(max(a * a - x * x, 0.0))
-    area = (a * a * math.acos(max(-1.0, min(1.0, x / a)))
-            + b * b * math.acos(max(-1.0, min(1.0, (c - x) / b))) - c * y)
+    # overlap of the discs = two circular segments, r^2 (phi - sin phi) / 2 with phi twice the
+    # half-angle of the common chord (half-length y) seen from each centre; y from the four
+    # side differences (no cancellation), phi - sin phi by its series for small phi
+    y = 0.5 * math.sqrt(max((a + b - c) * (b + c - a) * (c + a - b) * (a + b + c), 0.0)) / c
+    ta = 2.0 * math.atan2(y, (c * c + a * a - b * b) / (2.0 * c))
+    tb = 2.0 * math.atan2(y, (c * c + b * b - a * a) / (2.0 * c))
+    area = 0.5 * (a * a * phi_minus_sin(ta) + b * b * phi_minus_sin(tb))
     return 1.0 - area / (math.pi * a * a)
+
+
+@jit_inline
+def phi_minus_sin(phi):
+    """``phi - sin(phi)`` without cancellation for small ``phi`` (Taylor series below 0.25,
+    relative error < 1e-15)."""
+    if phi >= 0.25:
+        return phi - math.sin(phi)
+    p2 = phi * phi
+    return phi * p2 * (1.0 / 6.0 - p2 * (1.0 / 120.0 - p2 * (1.0 / 5040.0 - p2 * (1.0 / 362880.0
+                                                                                 - p2 / 39916800.0))))
 
 
 @jit_inline

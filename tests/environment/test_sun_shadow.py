@@ -123,3 +123,28 @@ def test_annular_and_validation():
     assert nu[0] == pytest.approx(1.0 - b**2 / a**2, rel=1e-12)
     with pytest.raises(InputError, match="kind"):
         sun.shadow(np.ones(3), r_sun, kind="conic")
+
+
+@pytest.mark.parametrize("frac", [0.01, 0.2, 0.5, 0.8, 0.99])
+def test_penumbra_fraction_against_quadrature(frac):
+    """nu in the penumbra = 1 - (overlap of the two apparent discs) / (pi a^2), the overlap
+    integrated numerically: chord of the body's disc across the Sun's disc."""
+    from scipy.integrate import quad
+
+    rn = R_EARTH_WGS84 + 400.0
+    b = np.arcsin(R_EARTH_WGS84 / rn)
+    d = sun.AU
+    a = np.arcsin(sun.R_SUN / d)
+    c = (b - a) + frac * 2.0 * a           # from umbra contact to penumbra contact
+    # satellite at -x * rn; the Sun seen at angle c from the body's centre direction (+x)
+    r_sat = np.array([-rn, 0.0, 0.0])
+    r_sun = r_sat + d * np.array([np.cos(c), np.sin(c), 0.0])
+    nu = sun.shadow(r_sat, r_sun, body_radius=R_EARTH_WGS84, sun_radius=sun.R_SUN)[0]
+
+    def inside(u):   # chord at abscissa u common to the Sun disc |p| <= a and the body disc |p - (c, 0)| <= b
+        half_sun = np.sqrt(max(a * a - u * u, 0.0))
+        half_body = np.sqrt(max(b * b - (u - c) ** 2, 0.0))
+        return 2.0 * min(half_sun, half_body)
+
+    overlap = quad(inside, -a, a, epsabs=1e-16, epsrel=1e-12, limit=200)[0]
+    assert nu == pytest.approx(1.0 - overlap / (np.pi * a * a), abs=1e-9)
