@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ._jit import jit, jit_inline
 
 
@@ -171,3 +173,15 @@ def spline_eval(table, t, ncomp, slot, work):
     v2 = _cubic(row, 2, s) if ncomp > 2 else 0.0
     v3 = _cubic(row, 3, s) if ncomp > 3 else 0.0
     return v0, v1, v2, v3
+
+
+@jit
+def spline_eval_many(table, t, ncomp):
+    """:func:`spline_eval` at each time of ``t`` (for outputs and tests): ``(len(t), ncomp)``."""
+    work = np.full(1, np.nan)
+    out = np.empty((t.shape[0], ncomp))
+    for j in range(t.shape[0]):
+        v = spline_eval(table, t[j], ncomp, 0, work)
+        for k in range(ncomp):
+            out[j, k] = v[k]
+    return out
