@@ -28,7 +28,7 @@ from ..epoch import parse_epoch
 from ..errors import InputError
 from .frames import as_time_array, as_vectors, gcrs_to_itrs, itrs_to_gcrs
 
-__all__ = ["IGRFField", "DipoleField", "igrf_coefficients", "IGRF_REFERENCE_RADIUS"]
+__all__ = ["GeomagneticField", "IGRFField", "DipoleField", "igrf_coefficients", "IGRF_REFERENCE_RADIUS"]
 
 #: IGRF's reference radius (km), as in ``ppigrf``
 IGRF_REFERENCE_RADIUS = 6371.2
@@ -121,7 +121,36 @@ def _series(r, theta_deg, phi_deg, g, h, keys):
     return b_r, b_t, b_p
 
 
-class IGRFField:
+class GeomagneticField:
+    """Base of the field models: :meth:`field` rotates the positions to ITRS, calls the
+    subclass's ``field_itrs(t, r_itrs_km) -> B (N, 3) T, ITRS`` and rotates ``B`` back."""
+
+    def check_instants(self, t):
+        """Refuse instants the model does not cover (before any frame transform)."""
+
+    def field(self, t, r_gcrs_km):
+        """Geomagnetic field at geocentric GCRS positions.
+
+        Parameters
+        ----------
+        t : astropy.time.Time
+            Instants, shape ``(N,)`` (or scalar): the Earth's orientation (and, for IGRF,
+            the coefficients; 1900-2030).
+        r_gcrs_km : array_like (N, 3)
+            Positions in GCRS, km.
+
+        Returns
+        -------
+        ndarray (N, 3)
+            ``B`` in tesla, GCRS components.
+        """
+        r = as_vectors(r_gcrs_km, "r_gcrs_km")
+        t = as_time_array(t, r.shape[0])
+        self.check_instants(t)
+        return itrs_to_gcrs(t, self.field_itrs(t, gcrs_to_itrs(t, r)))
+
+
+class IGRFField(GeomagneticField):
     """The International Geomagnetic Reference Field (IGRF-14, degrees 1-13) via ``ppigrf``.
 
     Parameters
@@ -142,6 +171,9 @@ class IGRFField:
             raise InputError(f"max_degree: {max_degree!r} must be an integer in 1..13 (IGRF's degrees)")
         self.max_degree = int(max_degree)
 
+    def check_instants(self, t):
+        _unix_seconds(t, "t")
+
     def field_itrs(self, t, r_itrs_km):
         """Field (T) in ITRS components at Earth-fixed positions ``r_itrs_km`` (N, 3)."""
         x = as_vectors(r_itrs_km, "r_itrs_km")
@@ -158,31 +190,11 @@ class IGRFField:
             out[sl] = b_r[:, None] * e_r + b_t[:, None] * e_t + b_p[:, None] * e_p
         return out * NANOTESLA
 
-    def field(self, t, r_gcrs_km):
-        """Geomagnetic field at geocentric GCRS positions.
-
-        Parameters
-        ----------
-        t : astropy.time.Time
-            Instants, shape ``(N,)`` (or scalar), inside 1900-2030.
-        r_gcrs_km : array_like (N, 3)
-            Positions in GCRS, km.
-
-        Returns
-        -------
-        ndarray (N, 3)
-            ``B`` in tesla, GCRS components.
-        """
-        r = as_vectors(r_gcrs_km, "r_gcrs_km")
-        t = as_time_array(t, r.shape[0])
-        _unix_seconds(t, "t")   # refuse instants outside IGRF before any frame transform
-        return itrs_to_gcrs(t, self.field_itrs(t, gcrs_to_itrs(t, r)))
-
     def __repr__(self):
         return f"IGRFField(max_degree={self.max_degree})"
 
 
-class DipoleField:
+class DipoleField(GeomagneticField):
     """A centred, tilted dipole: IGRF-14's degree-1 coefficients ``g10, g11, h11`` at ``epoch``.
 
     The dipole is fixed in the Earth (ITRS) and keeps the coefficients of ``epoch`` at every
@@ -215,33 +227,15 @@ class DipoleField:
         g10, g11, h11 = self.coefficients
         self.moment_itrs = np.array([g11, h11, g10])
 
-    def field_itrs(self, r_itrs_km):
-        """Field (T) in ITRS components at Earth-fixed positions ``r_itrs_km`` (N, 3)."""
+    def field_itrs(self, t, r_itrs_km):
+        """Field (T) in ITRS components at Earth-fixed positions ``r_itrs_km`` (N, 3); the
+        dipole does not change with ``t``."""
         x = as_vectors(r_itrs_km, "r_itrs_km")
         r = np.linalg.norm(x, axis=1)[:, None]
         e = x / r
         m = self.moment_itrs[None, :]
         b = (IGRF_REFERENCE_RADIUS / r) ** 3 * (3.0 * np.sum(m * e, axis=1)[:, None] * e - m)
         return b * NANOTESLA
-
-    def field(self, t, r_gcrs_km):
-        """Dipole field at geocentric GCRS positions.
-
-        Parameters
-        ----------
-        t : astropy.time.Time
-            Instants, shape ``(N,)`` (or scalar): they set the Earth's orientation.
-        r_gcrs_km : array_like (N, 3)
-            Positions in GCRS, km.
-
-        Returns
-        -------
-        ndarray (N, 3)
-            ``B`` in tesla, GCRS components.
-        """
-        r = as_vectors(r_gcrs_km, "r_gcrs_km")
-        t = as_time_array(t, r.shape[0])
-        return itrs_to_gcrs(t, self.field_itrs(gcrs_to_itrs(t, r)))
 
     def __repr__(self):
         return f"DipoleField(epoch={self.epoch.utc.isot!r})"
