@@ -1,0 +1,187 @@
+"""Environment kernels on plain floats: exponential densities, the shadow function and the
+cubic-spline tables of the fields sampled along the orbit (``DESIGN.md`` §10).
+
+Units: km for lengths, s for times, kg/m^3 for densities (the table's units for anything
+else). Vectors are 3-sequences of floats (tuples or 1-D arrays). The API counterparts, which
+build the parameter arrays and tables, are in :mod:`orbatt.environment`.
+
+Parameter layouts
+-----------------
+* exponential density: ``params = [rho0 (kg/m^3), h0 (km), H (km), R (km)]``,
+  ``rho = rho0 exp(-(|r| - R - h0) / H)``.
+* piecewise exponential: ``table = [R, h0_0, rho0_0, H_0, h0_1, rho0_1, H_1, ...]`` (km,
+  kg/m^3, km), layers by increasing base altitude ``h0_k``; layer ``k`` serves
+  ``h0_k <= h < h0_{k+1}`` (the first layer also below ``h0_0``, the last above).
+* spline table: ``table[i] = [t_i, c0, c1, c2, c3 (component 0), c0..c3 (component 1), ...]``,
+  shape ``(N, 1 + 4 ncomp)``; on ``[t_i, t_{i+1}]`` component ``k`` is
+  ``c0 + c1 s + c2 s^2 + c3 s^3`` with ``s = t - t_i``. The last row holds ``t_{N-1}`` and
+  the end values in ``c0`` (other coefficients 0); it is never an interval.
+
+Interval search (:func:`find_row`) keeps the last row used in ``work[slot]`` (NaN: none),
+as :func:`orbatt.core.sampled.find_interval` does, so consecutive nearby times cost O(1).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import jit, jit_inline
+
+
+# ---- densities ---------------------------------------------------------------------------
+@jit_inline
+def exponential_density(r_km, params):
+    """Density (kg/m^3) of an exponential atmosphere at position ``r_km`` (km, any frame
+    centred on the body): ``rho0 exp(-(h - h0) / H)``, ``h = |r| - R``;
+    ``params = [rho0, h0, H, R]``."""
+    h = math.sqrt(r_km[0] * r_km[0] + r_km[1] * r_km[1] + r_km[2] * r_km[2]) - params[3]
+    return params[0] * math.exp(-(h - params[1]) / params[2])
+
+
+@jit_inline
+def piecewise_density(r_km, table):
+    """Density (kg/m^3) of a piecewise exponential atmosphere at ``r_km`` (km);
+    ``table = [R, h0_0, rho0_0, H_0, ...]`` (layers by increasing ``h0``)."""
+    h = math.sqrt(r_km[0] * r_km[0] + r_km[1] * r_km[1] + r_km[2] * r_km[2]) - table[0]
+    n = (table.shape[0] - 1) // 3
+    lo = 0
+    hi = n
+    while hi - lo > 1:          # largest k with h0_k <= h (0 below the first layer)
+        mid = (lo + hi) // 2
+        if table[1 + 3 * mid] <= h:
+            lo = mid
+        else:
+            hi = mid
+    b = 1 + 3 * lo
+    return table[b + 1] * math.exp(-(h - table[b]) / table[b + 2])
+
+
+# ---- shadow function ------------------------------------------------------------------------
+@jit_inline
+def shadow_conical(r_sat, r_sun, R_body, R_sun):
+    """Fraction of the Sun's disc seen from ``r_sat`` (0 umbra ... 1 full Sun), conical
+    model with the apparent-disc overlap (Montenbruck & Gill 2000, §3.4.2).
+
+    ``r_sat``, ``r_sun``: positions relative to the occulting body's centre (km);
+    ``R_body``, ``R_sun``: radii (km)."""
+    dx = r_sun[0] - r_sat[0]
+    dy = r_sun[1] - r_sat[1]
+    dz = r_sun[2] - r_sat[2]
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    rs = math.sqrt(r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2])
+    a = math.asin(min(R_sun / d, 1.0))      # apparent radius of the Sun
+    b = math.asin(min(R_body / rs, 1.0))    # apparent radius of the body
+    # apparent separation of the centres: angle between -r_sat and r_sun - r_sat
+    cx = -(r_sat[1] * dz - r_sat[2] * dy)
+    cy = -(r_sat[2] * dx - r_sat[0] * dz)
+    cz = -(r_sat[0] * dy - r_sat[1] * dx)
+    dot = -(r_sat[0] * dx + r_sat[1] * dy + r_sat[2] * dz)
+    c = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot)
+    if c >= a + b:
+        return 1.0
+    if c <= b - a:
+        return 0.0
+    if c <= a - b:              # the body's disc inside the Sun's (annular)
+        return 1.0 - (b * b) / (a * a)
+    # overlap of the discs = two circular segments, r^2 (phi - sin phi) / 2 with phi twice the
+    # half-angle of the common chord (half-length y) seen from each centre; y from the four
+    # side differences (no cancellation), phi - sin phi by its series for small phi
+    y = 0.5 * math.sqrt(max((a + b - c) * (b + c - a) * (c + a - b) * (a + b + c), 0.0)) / c
+    ta = 2.0 * math.atan2(y, (c * c + a * a - b * b) / (2.0 * c))
+    tb = 2.0 * math.atan2(y, (c * c + b * b - a * a) / (2.0 * c))
+    area = 0.5 * (a * a * phi_minus_sin(ta) + b * b * phi_minus_sin(tb))
+    return 1.0 - area / (math.pi * a * a)
+
+
+@jit_inline
+def phi_minus_sin(phi):
+    """``phi - sin(phi)`` without cancellation for small ``phi`` (Taylor series below 0.25,
+    relative error < 1e-15)."""
+    if phi >= 0.25:
+        return phi - math.sin(phi)
+    p2 = phi * phi
+    return phi * p2 * (1.0 / 6.0 - p2 * (1.0 / 120.0 - p2 * (1.0 / 5040.0 - p2 * (1.0 / 362880.0
+                                                                                 - p2 / 39916800.0))))
+
+
+@jit_inline
+def shadow_cylindrical(r_sat, r_sun, R_body, R_sun):
+    """Cylindrical shadow: 0 behind the body inside the cylinder of radius ``R_body`` along
+    the Sun direction, else 1 (``R_sun`` unused; the same signature as
+    :func:`shadow_conical`)."""
+    n = math.sqrt(r_sun[0] * r_sun[0] + r_sun[1] * r_sun[1] + r_sun[2] * r_sun[2])
+    along = (r_sat[0] * r_sun[0] + r_sat[1] * r_sun[1] + r_sat[2] * r_sun[2]) / n
+    if along >= 0.0:
+        return 1.0
+    r2 = r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2]
+    if r2 - along * along < R_body * R_body:
+        return 0.0
+    return 1.0
+
+
+# ---- sampled tables ------------------------------------------------------------------------
+@jit
+def find_row(table, t, work, slot):
+    """Index ``i`` with ``table[i, 0] <= t <= table[i + 1, 0]`` (the first column holds
+    increasing times), warm-started from ``work[slot]`` and stored there. Raises
+    ``ValueError`` for ``t`` outside ``[table[0, 0], table[-1, 0]]``."""
+    n = table.shape[0]
+    if not (t >= table[0, 0] and t <= table[n - 1, 0]):
+        raise ValueError("environment table: time outside the sampled span; sample the "
+                         "environment over the whole integration span")
+    w = work[slot]
+    if w == w:
+        i = int(w)
+        if 0 <= i < n - 1:
+            if table[i, 0] <= t:
+                if t <= table[i + 1, 0]:
+                    return i
+                if i + 2 < n and t <= table[i + 2, 0]:
+                    work[slot] = i + 1
+                    return i + 1
+            elif i >= 1 and table[i - 1, 0] <= t:
+                work[slot] = i - 1
+                return i - 1
+    lo = 0
+    hi = n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if table[mid, 0] <= t:
+            lo = mid
+        else:
+            hi = mid
+    work[slot] = lo
+    return lo
+
+
+@jit_inline
+def _cubic(row, k, s):
+    b = 1 + 4 * k
+    return row[b] + s * (row[b + 1] + s * (row[b + 2] + s * row[b + 3]))
+
+
+@jit_inline
+def spline_eval(table, t, ncomp, slot, work):
+    """Values at ``t`` of the first ``ncomp`` (1..4) components of a spline table: a tuple of
+    4 floats, the unused ones 0. ``work[slot]`` keeps the interval (:func:`find_row`)."""
+    i = find_row(table, t, work, slot)
+    row = table[i]
+    s = t - row[0]
+    v0 = _cubic(row, 0, s)
+    v1 = _cubic(row, 1, s) if ncomp > 1 else 0.0
+    v2 = _cubic(row, 2, s) if ncomp > 2 else 0.0
+    v3 = _cubic(row, 3, s) if ncomp > 3 else 0.0
+    return v0, v1, v2, v3
+
+
+@jit
+def spline_eval_many(table, t, ncomp):
+    """:func:`spline_eval` at each time of ``t`` (for outputs and tests): ``(len(t), ncomp)``."""
+    work = np.full(1, np.nan)
+    out = np.empty((t.shape[0], ncomp))
+    for j in range(t.shape[0]):
+        v = spline_eval(table, t[j], ncomp, 0, work)
+        for k in range(ncomp):
+            out[j, k] = v[k]
+    return out

@@ -1,0 +1,187 @@
+"""Earth-fixed frames and geodetic coordinates along an orbit, through astropy.
+
+orbatt's inertial frame ``S`` is astropy's ``GCRS`` (geocentric) whenever an epoch is given
+(``DESIGN.md`` §11); the field libraries want Earth-fixed coordinates (``ITRS``) or geodetic
+ones (WGS84). Every function here takes the instants as an astropy ``Time`` array ``t`` of
+shape ``(N,)`` (or a scalar ``Time``, used for every row) and vectors as float arrays
+``(N, 3)`` in km (positions) or any unit (free vectors such as a magnetic field).
+
+GCRS -> ITRS for a geocentric position is a rotation (bias-precession-nutation, Earth
+rotation, polar motion): :func:`rotation_gcrs_to_itrs` takes that matrix from astropy (the
+images of the three basis vectors) and the other functions apply it, so positions and free
+vectors go through the same matrix.
+
+Earth orientation data come from the tables that ship with astropy (``astropy-iers-data``);
+nothing is downloaded (:func:`offline_iers`). Outside the tables' span astropy extrapolates
+(UT1-UTC held, mean polar motion) and warns; the error is then of the order of an arcsecond
+in the Earth-fixed longitude.
+"""
+from __future__ import annotations
+
+import contextlib
+
+import numpy as np
+from astropy import units as u
+
+from ..errors import InputError
+
+__all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "gcrs_to_itrs",
+           "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84"]
+
+#: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
+#: and the default occulting body of the shadow function
+R_EARTH_WGS84 = 6378.137
+#: Earth's mean rotation rate (rad/s) relative to the inertial frame (IERS Conventions 2010,
+#: the value of the WGS84/GRS80 ``omega``), for a co-rotating atmosphere ``omega_E x r``.
+EARTH_ROTATION_RATE = 7.292115e-5
+
+
+@contextlib.contextmanager
+def offline_iers():
+    """Context in which astropy uses only its bundled Earth orientation tables: no download
+    (``iers.conf.auto_download = False``) and no error for predictions older than 30 days
+    (``auto_max_age = None``)."""
+    from astropy.utils import iers
+
+    with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
+        yield
+
+
+def as_time_array(t, n=None, name="t"):
+    """``t`` as a 1-D astropy ``Time`` of length ``n`` (a scalar ``Time`` is repeated).
+
+    Raises
+    ------
+    InputError
+        ``t`` is not a ``Time`` or its length is not ``n``.
+    """
+    from astropy.time import Time
+
+    if not isinstance(t, Time):
+        raise InputError(f"{name}: expected an astropy Time array, got {type(t).__name__}; "
+                         "build one with astropy.time.Time(epoch) + seconds * u.s")
+    if t.ndim == 0:
+        return t.reshape((1,)) if n is None else t.reshape((1,))[np.zeros(n, dtype=int)]
+    if t.ndim != 1 or (n is not None and t.shape[0] != n):
+        raise InputError(f"{name}: expected a Time array of shape ({n},), got shape {t.shape}; "
+                         "give one instant per row of the positions")
+    return t
+
+
+def as_vectors(v, name, unit=None):
+    """``v`` as a float64 array ``(N, 3)`` (a single 3-vector becomes ``(1, 3)``); a
+    Quantity is converted to ``unit`` first.
+
+    Raises
+    ------
+    InputError
+        Wrong shape, wrong dimension or non-finite values.
+    """
+    if isinstance(v, u.Quantity):
+        if unit is None:
+            raise InputError(f"{name}: give plain numbers here, not a Quantity ({v.unit})")
+        try:
+            v = v.to_value(unit)
+        except u.UnitConversionError:
+            raise InputError(f"{name}: {v.unit} is not a {unit.physical_type}; give e.g. '7000 {unit}'") from None
+    arr = np.asarray(v, dtype=np.float64)
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise InputError(f"{name}: expected an array of shape (N, 3), got shape {np.shape(v)}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name}: contains non-finite values; give finite vectors")
+    return arr
+
+
+def rotation_gcrs_to_itrs(t):
+    """Rotation matrices ``R`` with ``x_ITRS = R x_GCRS``, shape ``(N, 3, 3)``.
+
+    Parameters
+    ----------
+    t : astropy.time.Time
+        Instants, shape ``(N,)`` or scalar (then ``N = 1``).
+
+    Returns
+    -------
+    ndarray (N, 3, 3)
+        Orthogonal to round-off; columns are the ITRS components of the GCRS basis vectors.
+    """
+    from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
+
+    t = as_time_array(t)
+    n = t.shape[0]
+    # three geocentric positions per instant: the GCRS basis vectors (1000 km long)
+    tt = t[np.repeat(np.arange(n), 3)]
+    basis = np.tile(np.eye(3) * 1000.0, (n, 1))
+    with offline_iers():
+        g = GCRS(CartesianRepresentation(basis.T * u.km), obstime=tt)
+        x = g.transform_to(ITRS(obstime=tt)).cartesian.xyz.to_value(u.km).T / 1000.0
+    return np.ascontiguousarray(x.reshape(n, 3, 3).transpose(0, 2, 1))
+
+
+def gcrs_to_itrs(t, r_gcrs_km):
+    """Geocentric GCRS positions (or free vectors) to ITRS components.
+
+    Parameters
+    ----------
+    t : astropy.time.Time
+        Instants, shape ``(N,)`` (or scalar).
+    r_gcrs_km : array_like (N, 3)
+        GCRS components (km for positions; any unit for a free vector).
+
+    Returns
+    -------
+    ndarray (N, 3)
+        ITRS components, same unit.
+    """
+    r = as_vectors(r_gcrs_km, "r_gcrs_km", u.km)
+    t = as_time_array(t, r.shape[0])
+    return np.einsum("nij,nj->ni", rotation_gcrs_to_itrs(t), r)
+
+
+def itrs_to_gcrs(t, v_itrs):
+    """ITRS components of vectors (a field, a position) to GCRS components: the inverse
+    rotation of :func:`gcrs_to_itrs` (a free vector is rotated, not translated).
+
+    Parameters
+    ----------
+    t : astropy.time.Time
+        Instants, shape ``(N,)`` (or scalar).
+    v_itrs : array_like (N, 3)
+        ITRS components, any unit (plain numbers).
+
+    Returns
+    -------
+    ndarray (N, 3)
+        GCRS components, same unit.
+    """
+    v = as_vectors(v_itrs, "v_itrs")
+    t = as_time_array(t, v.shape[0])
+    return np.einsum("nji,nj->ni", rotation_gcrs_to_itrs(t), v)
+
+
+def geodetic(t, r_gcrs_km):
+    """Geodetic coordinates (WGS84) of geocentric GCRS positions.
+
+    Parameters
+    ----------
+    t : astropy.time.Time
+        Instants, shape ``(N,)`` (or scalar).
+    r_gcrs_km : array_like (N, 3)
+        Positions in GCRS, km.
+
+    Returns
+    -------
+    lat_deg, lon_deg, alt_km : ndarray (N,)
+        Geodetic latitude (deg), east longitude in ``(-180, 180]`` (deg) and height above
+        the WGS84 ellipsoid (km).
+    """
+    from astropy.coordinates import EarthLocation
+
+    x = gcrs_to_itrs(t, r_gcrs_km)
+    loc = EarthLocation.from_geocentric(x[:, 0], x[:, 1], x[:, 2], unit=u.km)
+    lon, lat, h = loc.to_geodetic("WGS84")
+    return (np.asarray(lat.to_value(u.deg), dtype=np.float64),
+            np.asarray(lon.wrap_at(180 * u.deg).to_value(u.deg), dtype=np.float64),
+            np.asarray(h.to_value(u.km), dtype=np.float64))

@@ -1,0 +1,62 @@
+"""orbatt.environment.frames: GCRS <-> ITRS rotation and WGS84 geodetic coordinates, checked
+against astropy's own position transforms and known Earth-fixed points."""
+import numpy as np
+import pytest
+from astropy import units as u
+from astropy.coordinates import GCRS, ITRS, CartesianRepresentation, EarthLocation
+from astropy.time import Time
+
+from orbatt.environment import frames
+from orbatt.errors import InputError
+
+T = Time("2024-03-20T12:00:00", scale="utc") + np.linspace(0.0, 86400.0, 7) * u.s
+
+
+def _positions(n, radius=6778.0, seed=3):
+    r = np.random.default_rng(seed).normal(size=(n, 3))
+    return radius * r / np.linalg.norm(r, axis=1)[:, None]
+
+
+def test_gcrs_to_itrs_equals_astropy_position_transform():
+    r = _positions(7)
+    with frames.offline_iers():
+        ref = GCRS(CartesianRepresentation(r.T * u.km), obstime=T).transform_to(ITRS(obstime=T))
+    ref = ref.cartesian.xyz.to_value(u.km).T
+    np.testing.assert_allclose(frames.gcrs_to_itrs(T, r), ref, rtol=0, atol=1e-9)
+
+
+def test_rotation_is_orthogonal_and_inverse_round_trips():
+    R = frames.rotation_gcrs_to_itrs(T)
+    np.testing.assert_allclose(R @ R.transpose(0, 2, 1), np.broadcast_to(np.eye(3), R.shape), atol=1e-14)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-14)
+    v = _positions(7, radius=3e-5)   # a free vector (a field in T)
+    np.testing.assert_allclose(frames.itrs_to_gcrs(T, frames.gcrs_to_itrs(T, v)), v, atol=1e-19)
+
+
+def test_earth_turns_once_per_sidereal_day_about_the_pole():
+    """The ITRS longitude of a fixed GCRS point on the equator advances by -360 deg per
+    sidereal day (86164.0905 s)."""
+    t = Time("2024-03-20T00:00:00") + np.array([0.0, 86164.0905 / 4]) * u.s
+    x = frames.gcrs_to_itrs(t, np.array([[7000.0, 0.0, 0.0]] * 2))
+    lon = np.degrees(np.arctan2(x[:, 1], x[:, 0]))
+    assert ((lon[1] - lon[0] + 180.0) % 360.0 - 180.0) == pytest.approx(-90.0, abs=0.02)
+
+
+def test_geodetic_recovers_a_known_place():
+    loc = EarthLocation.from_geodetic(lon=5.32415 * u.deg, lat=60.39299 * u.deg, height=400 * u.km,
+                                      ellipsoid="WGS84")
+    x_itrs = np.array([loc.x.to_value(u.km), loc.y.to_value(u.km), loc.z.to_value(u.km)])
+    r_gcrs = frames.itrs_to_gcrs(T[2], x_itrs)
+    lat, lon, alt = frames.geodetic(T[2], r_gcrs)
+    assert lat[0] == pytest.approx(60.39299, abs=1e-9)
+    assert lon[0] == pytest.approx(5.32415, abs=1e-9)
+    assert alt[0] == pytest.approx(400.0, abs=1e-8)
+
+
+def test_bad_inputs_name_the_argument():
+    with pytest.raises(InputError, match="r_gcrs_km"):
+        frames.gcrs_to_itrs(T, np.zeros((7, 2)))
+    with pytest.raises(InputError, match="t: expected a Time array of shape"):
+        frames.gcrs_to_itrs(T, np.zeros((3, 3)))
+    with pytest.raises(InputError, match="t: expected an astropy Time"):
+        frames.gcrs_to_itrs(0.0, np.zeros((1, 3)))
