@@ -54,6 +54,20 @@ class Potential:
         """Plain description (strings and numbers) for Dataset attributes and scenarios."""
         return {"kind": self.name}
 
+    #: names of the torque terms of this potential (``torque_<name>`` in a Dataset; none
+    #: for a potential that is not a torque of the environment)
+    term_names: list = []
+
+    def term_torques(self, body, t, q):
+        """Each term's body torque ``(N, len(term_names), 3)`` in the body's energy unit (kg
+        km^2 s^-2 = kN m) at the times ``t`` and attitudes ``q (N, 4)``."""
+        _, _, tau = self.evaluate(body, t, q)
+        return np.asarray(tau, dtype=np.float64)[:, None, :]
+
+    def fields(self, t):
+        """The environment fields along the orbit a Dataset records (none here)."""
+        return {}
+
 
 class TorqueFree(Potential):
     """``U = 0``: the free rigid body (paper Sect. 6.1)."""
@@ -138,6 +152,7 @@ class GravityGradient(Potential):
 
     name = "gravity-gradient"
     dimensionless = False
+    term_names = ["gravity_gradient"]
 
     def __init__(self, orbit):
 

@@ -86,7 +86,7 @@ def rhs_lanes(t, Y, nl, I, terms, params, table, work, G, dY):
         return
     r, xhat, v = orbit_radial(t, terms, params, table, work)
     if n == 2:
-        kind, p0, c = term_constants(1, terms, params, r, xhat, v)
+        kind, p0, c = term_constants(1, t, terms, params, table, work, r, xhat, v)
         # the specializations (the formulas stay in orbatt.core.model.term_value)
         if kind == GRAVITY_GRADIENT:
             _lanes_one_term(GRAVITY_GRADIENT, p0, c, Y, nl, I, params, dY)
@@ -95,7 +95,7 @@ def rhs_lanes(t, Y, nl, I, terms, params, table, work, G, dY):
         else:
             _lanes_one_term(kind, p0, c, Y, nl, I, params, dY)
         return
-    terms_lanes(Y, nl, I, terms, params, r, xhat, v, G)
+    terms_lanes(t, Y, nl, I, terms, params, table, work, r, xhat, v, G)
     for l in range(nl):
         qd, Qd = eq7((Y[0, l], Y[1, l], Y[2, l], Y[3, l]), (Y[4, l], Y[5, l], Y[6, l], Y[7, l]),
                      (I[0, l], I[1, l], I[2, l]))

@@ -55,6 +55,7 @@ import numpy as np
 import math
 
 from ._jit import jit, jit_inline
+from . import environment as env
 from . import potentials as pot
 from . import torques as trq
 from .kepler import ORB_SIZE, kepler_radial, kepler_state
@@ -68,6 +69,8 @@ ORBIT_SAMPLED = 2
 HEAVY_TOP = 1
 GRAVITY_GRADIENT = 2
 DRAG = 3
+SRP = 4
+MAGNETIC = 5
 
 #: columns of a ``terms`` row
 KIND, P0, P1, R0, R1, FLAGS = 0, 1, 2, 3, 4, 5
@@ -75,11 +78,21 @@ TERM_FIELDS = 6
 #: row 0 ``FLAGS`` bit: a term reads the orbit's velocity
 NEEDS_VELOCITY = 1
 
-#: terms that read the orbit, and those that read its velocity
-ORBIT_TERMS = frozenset({GRAVITY_GRADIENT, DRAG})
+#: terms that read the orbit, those that read its velocity, and those with a table of their
+#: own (an environment field sampled along the orbit; the row's ``FLAGS`` column holds the
+#: slot of ``work`` that keeps its interval)
+ORBIT_TERMS = frozenset({GRAVITY_GRADIENT, DRAG, SRP, MAGNETIC})
 VELOCITY_TERMS = frozenset({DRAG})
-#: parameters of a drag term before its facets: ``[rho0, h0, H, R_eq, omega, nfacets]``
-DRAG_HEADER = 6
+TABLE_TERMS = frozenset({DRAG, SRP, MAGNETIC})
+#: the first slot of ``work`` given to tables (0..2: Kepler's warm start, 3: the sampled
+#: orbit); :data:`orbatt.core.potentials.WORK_SIZE` bounds the number of table terms
+FIRST_TABLE_SLOT = 4
+#: parameters of a drag term before its facets: ``[omega, nfacets]``
+DRAG_HEADER = 2
+#: parameters of an SRP term before its facets: ``[P1AU, AU, shadow, R_body, R_sun, nfacets]``
+SRP_HEADER = 6
+#: shadow models of the SRP term
+SHADOW_NONE, SHADOW_CYLINDRICAL, SHADOW_CONICAL = 0, 1, 2
 
 
 # ---------------------------------------------------------------------------------------
@@ -108,11 +121,10 @@ def orbit_radial(t, terms, params, table, work):
 
 
 @jit_inline
-def _drag_constants(params, p0, r, xhat, v):
-    """``(1/2 rho |v_rel|^2, v_rel / |v_rel|)`` of a drag term: exponential density
-    ``rho0 exp(-(h - h0) / H)``, ``h = r - R_eq``; ``v_rel = v - omega s3 x r``."""
-    rho = params[p0] * math.exp(-((r - params[p0 + 3]) - params[p0 + 1]) / params[p0 + 2])
-    w = params[p0 + 4]
+def _drag_constants(rho, params, p0, r, xhat, v):
+    """``(1/2 rho |v_rel|^2, v_rel / |v_rel|)`` of a drag term for the density ``rho``;
+    ``v_rel = v - omega s3 x r`` (``omega = params[p0]``: the atmosphere's rotation)."""
+    w = params[p0]
     vx = v[0] + w * r * xhat[1]
     vy = v[1] - w * r * xhat[0]
     vz = v[2]
@@ -123,11 +135,32 @@ def _drag_constants(params, p0, r, xhat, v):
 
 
 @jit_inline
-def term_constants(j, terms, params, r, xhat, v):
+def _srp_constants(sun, params, p0, r, xhat):
+    """``(P, s^)`` of an SRP term: the pressure ``nu P1AU (AU / d)^2`` with the shadow
+    function ``nu`` and the unit vector ``s^`` from the body to the Sun (``sun``: the Sun's
+    position, inertial)."""
+    rs = (r * xhat[0], r * xhat[1], r * xhat[2])
+    dx = sun[0] - rs[0]
+    dy = sun[1] - rs[1]
+    dz = sun[2] - rs[2]
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    kind = params[p0 + 2]
+    nu = 1.0
+    if kind == SHADOW_CONICAL:
+        nu = env.shadow_conical(rs, sun, params[p0 + 3], params[p0 + 4])
+    elif kind == SHADOW_CYLINDRICAL:
+        nu = env.shadow_cylindrical(rs, sun, params[p0 + 3], params[p0 + 4])
+    au = params[p0 + 1] / d
+    return (nu * params[p0] * au * au, dx / d, dy / d, dz / d)
+
+
+@jit_inline
+def term_constants(j, t, terms, params, table, work, r, xhat, v):
     """``(kind, p0, c)``: the kind of term row ``j``, the start of its parameters and the four
-    constants it needs at one time (read once per evaluation, outside any loop over members:
-    gravity gradient ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``, drag
-    ``(1/2 rho |v|^2, v^)``)."""
+    constants it needs at time ``t`` (read once per evaluation, outside any loop over
+    members): gravity gradient ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``, drag
+    ``(1/2 rho |v|^2, v^)``, SRP ``(P, s^)``, magnetic ``B`` (inertial). The environment
+    fields come from the term's spline table (:func:`orbatt.core.environment.spline_eval`)."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
     if kind == GRAVITY_GRADIENT:
@@ -135,7 +168,14 @@ def term_constants(j, terms, params, r, xhat, v):
     elif kind == HEAVY_TOP:
         return kind, p0, (params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
     elif kind == DRAG:
-        return kind, p0, _drag_constants(params, p0, r, xhat, v)
+        rho = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 1, terms[j, FLAGS], work)[0]
+        return kind, p0, _drag_constants(rho, params, p0, r, xhat, v)
+    elif kind == SRP:
+        sun = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+        return kind, p0, _srp_constants(sun, params, p0, r, xhat)
+    elif kind == MAGNETIC:
+        b = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+        return kind, p0, (b[0], b[1], b[2], 0.0)
     return kind, p0, (0.0, 0.0, 0.0, 0.0)
 
 
@@ -149,19 +189,25 @@ def term_value(kind, p0, c, q, inertia, params):
     elif kind == HEAVY_TOP:
         return pot.heavy_top(q, c)
     elif kind == DRAG:
-        tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 5]))
+        tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 1]))
+        return 0.0, trq.gradient_of_torque(q, tau)
+    elif kind == SRP:
+        tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
+        return 0.0, trq.gradient_of_torque(q, tau)
+    elif kind == MAGNETIC:
+        tau = trq.dipole_torque(q, (params[p0], params[p0 + 1], params[p0 + 2]), (c[0], c[1], c[2]))
         return 0.0, trq.gradient_of_torque(q, tau)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit_inline
-def terms_at(q, inertia, terms, params, r, xhat, v):
+def terms_at(t, q, inertia, terms, params, table, work, r, xhat, v):
     """``(U, G)`` summed over the terms (rows ``1..n``) at the attitude ``q`` (4-tuple), the
     orbit's ``r``, ``xhat`` and ``v`` given; starts from the first term's value."""
-    kind, p0, c = term_constants(1, terms, params, r, xhat, v)
+    kind, p0, c = term_constants(1, t, terms, params, table, work, r, xhat, v)
     U, G = term_value(kind, p0, c, q, inertia, params)
     for j in range(2, terms.shape[0]):
-        kind, p0, c = term_constants(j, terms, params, r, xhat, v)
+        kind, p0, c = term_constants(j, t, terms, params, table, work, r, xhat, v)
         u, g = term_value(kind, p0, c, q, inertia, params)
         U += u
         G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
@@ -174,7 +220,7 @@ def gradient(t, q, inertia, terms, params, table, work):
     attitude ``q`` (4-tuple); ``(0, 0)`` for an empty model."""
     if terms.shape[0] > 1:
         r, xhat, v = orbit_radial(t, terms, params, table, work)
-        return terms_at(q, inertia, terms, params, r, xhat, v)
+        return terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
 
 
@@ -197,14 +243,14 @@ def _term_lanes(kind, p0, c, Y, nl, I, params, G, first):
 
 
 @jit_inline
-def terms_lanes(Y, nl, I, terms, params, r, xhat, v, G):
+def terms_lanes(t, Y, nl, I, terms, params, table, work, r, xhat, v, G):
     """:func:`terms_at` for lanes ``0..nl-1`` of ``Y (8, L)`` (inertia ``I (3, L)``) into
     ``G (4, L)``, the same sums in the same order as one member. One loop over the lanes per
     term, specialized to the term's kind (a constant kind makes :func:`term_value`'s
     dispatch fold away, so that LLVM vectorizes the loop: it does not unswitch a loop on a
     run-time kind); kinds without a specialization take the generic loop."""
     for j in range(1, terms.shape[0]):
-        kind, p0, c = term_constants(j, terms, params, r, xhat, v)
+        kind, p0, c = term_constants(j, t, terms, params, table, work, r, xhat, v)
         first = j == 1
         if kind == GRAVITY_GRADIENT:
             _term_lanes(GRAVITY_GRADIENT, p0, c, Y, nl, I, params, G, first)
@@ -222,7 +268,7 @@ def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
     if terms.shape[0] <= 1:
         return False
     r, xhat, v = orbit_radial(t, terms, params, table, work)
-    terms_lanes(Y, nl, I, terms, params, r, xhat, v, G)
+    terms_lanes(t, Y, nl, I, terms, params, table, work, r, xhat, v, G)
     return True
 
 
@@ -242,7 +288,7 @@ def evaluate_terms(t, q, inertia, terms, params, table, work):
         qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
         r, xhat, v = orbit_radial(t[i], terms, params, table, work)
         for j in range(1, nt + 1):
-            kind, p0, c = term_constants(j, terms, params, r, xhat, v)
+            kind, p0, c = term_constants(j, t[i], terms, params, table, work, r, xhat, v)
             u, g = term_value(kind, p0, c, qi, inertia_t, params)
             U[i, j - 1] = u
             tq = pot.torque_from_gradient(qi, g)
@@ -317,17 +363,35 @@ def build(orbit=None, terms=()):
         raise ValueError("a term that reads the orbit needs an orbit (row 0)")
     if kinds & VELOCITY_TERMS:
         spec[0, FLAGS] |= NEEDS_VELOCITY
+    slot = FIRST_TABLE_SLOT
+    for row in spec[1:]:
+        if int(row[KIND]) in TABLE_TERMS:
+            if row[R1] - row[R0] < 2:
+                raise ValueError(f"term kind {int(row[KIND])} needs a spline table of at least 2 rows")
+            if slot >= pot.WORK_SIZE:
+                raise ValueError(f"at most {pot.WORK_SIZE - FIRST_TABLE_SLOT} terms with tables")
+            row[FLAGS] = slot
+            slot += 1
     return spec, params, table
 
 
-def drag_params(facets, density0, altitude0, scale_height, body_radius, omega):
-    """The parameters of a :data:`DRAG` term: the exponential atmosphere ``density0 exp(-(h -
-    altitude0) / scale_height)``, ``h = r - body_radius``, turning at the rate ``omega``
-    (rad per time unit about inertial axis 3; 0: a still atmosphere), and the facets
-    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). Units: the
-    caller's consistent system (orbatt: kg, km, s; density in kg km^-3)."""
+def drag_params(facets, omega):
+    """The parameters of a :data:`DRAG` term: the atmosphere's rotation rate ``omega`` (rad per
+    time unit about inertial axis 3; 0: a still atmosphere) and the facets
+    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). Its table:
+    the density along the orbit (one component; kg per volume unit)."""
     facets = np.asarray(facets, dtype=np.float64).reshape(-1, trq.FACET_SIZE)
-    return np.concatenate([[density0, altitude0, scale_height, body_radius, omega, facets.shape[0]], facets.ravel()])
+    return np.concatenate([[omega, facets.shape[0]], facets.ravel()])
+
+
+def srp_params(facets, pressure_1au, au, shadow, body_radius, sun_radius):
+    """The parameters of an :data:`SRP` term: the radiation pressure at 1 AU (force per area,
+    the caller's units), the AU (length unit), the shadow model (:data:`SHADOW_NONE`,
+    :data:`SHADOW_CYLINDRICAL`, :data:`SHADOW_CONICAL`), the radii of the occulting body and
+    of the Sun, and the facets (coefficient: the area). Its table: the Sun's position
+    (inertial, three components)."""
+    facets = np.asarray(facets, dtype=np.float64).reshape(-1, trq.FACET_SIZE)
+    return np.concatenate([[pressure_1au, au, shadow, body_radius, sun_radius, facets.shape[0]], facets.ravel()])
 
 
 def from_spec(kind, params, table):

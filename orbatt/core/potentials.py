@@ -44,7 +44,8 @@ GRAVITY_GRADIENT_KEPLER = 2
 GRAVITY_GRADIENT_SAMPLED = 3
 
 EMPTY_TABLE = np.zeros((0, 0), dtype=np.float64)
-WORK_SIZE = 4
+#: scratch slots: 0..2 Kepler's warm start, 3 the sampled orbit, 4..7 environment tables
+WORK_SIZE = 8
 
 
 def new_work(*batch):

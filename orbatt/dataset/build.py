@@ -313,10 +313,48 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
                               body_axes="body axes 2, 3, 1 nominally along o2, o3, o1"),
         })
 
+    data.update(_torque_variables(tr.potential, body, inertia, t, q, tdims, ens))
+
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title)
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+#: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m
+_TORQUE_TO_N_M = 1e6
+_FIELD_VARIABLES = {
+    "density": ((), "kg m-3", "atmospheric density along the orbit", {}),
+    "magnetic_field": (("axis",), "T", "geomagnetic field along the orbit (inertial components)", {"frame": "S"}),
+    "sun_direction": (("axis",), "1", "unit vector from the body to the Sun (inertial components)", {"frame": "S"}),
+    "shadow": ((), "1", "shadow function: 0 = umbra ... 1 = full Sun", {}),
+}
+
+
+def _torque_variables(potential, body, inertia, t, q, tdims, ens):
+    """``torque`` (the total) and ``torque_<term>`` of each torque term of ``potential``
+    (body axes, N m), and the environment fields it used along the orbit."""
+    names = list(getattr(potential, "term_names", []) or [])
+    if not names or body.dimensionless:
+        return {}
+    if ens:
+        tau = np.stack([potential.term_torques(_member_body(body, inertia[e]), t, q[e]) for e in range(q.shape[0])])
+    else:
+        tau = potential.term_torques(body, t, q)
+    tau = tau * _TORQUE_TO_N_M
+    vv = tdims + ("axis",)
+    total = tau[..., 0, :].copy()
+    for k in range(1, len(names)):
+        total += tau[..., k, :]
+    out = {"torque": cf_variable(vv, total, "N m", "total external torque on the body (body components)",
+                                 frame="B", terms=" + ".join(f"torque_{n}" for n in names))}
+    for k, n in enumerate(names):
+        out[f"torque_{n}"] = cf_variable(vv, np.ascontiguousarray(tau[..., k, :]), "N m",
+                                         f"{n.replace('_', ' ')} torque on the body (body components)", frame="B")
+    for key, values in potential.fields(t).items():
+        dims, unit, long_name, extra = _FIELD_VARIABLES[key]
+        out[key] = cf_variable(("time",) + dims, values, unit, long_name, **extra)
+    return out
 
 
 def _member_body(body, inertia):

@@ -11,6 +11,8 @@ from orbatt.core import kepler
 from orbatt.core import model as km
 from orbatt.core import potentials as kp
 from orbatt.core import torques as trq
+from orbatt.environment.sun import shadow
+from orbatt.environment.tables import spline_table
 
 rng = np.random.default_rng(11)
 
@@ -79,25 +81,68 @@ GM = 398600.4418
 ORB = kepler.orbit_vector(6778.0, 0.001, 0.9, 0.3, 0.2, 0.1, np.sqrt(GM / 6778.0**3))
 
 
+def _orbit_samples(t0=-100.0, t1=3100.0, step=10.0):
+    t = np.arange(t0, t1 + step / 2, step)
+    _, _, r, pos, vel = kepler.kepler_many(t, ORB, GM)
+    return t, r, pos, vel
+
+
+RHO0, H0, HS, REQ, WE = 3e-3, 400.0, 60.0, 6378.137, 7.2921159e-5
+
+
+def _drag_model(F):
+    ts, rs, _, _ = _orbit_samples()
+    dens = spline_table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
+    return km.build(orbit=(km.ORBIT_KEPLER, ORB, None), terms=[(km.DRAG, km.drag_params(F, WE), dens)])
+
+
 def test_drag_term_of_the_model():
-    """The model's drag term: exponential density at h = r - R_eq, velocity relative to the
+    """The model's drag term: the density table along the orbit, the velocity relative to the
     co-rotating atmosphere, the flat-plate torque; Kepler velocity against kepler_many."""
     F = _facets()
-    rho0, h0, Hs, Req, wE = 3e-3, 400.0, 60.0, 6378.137, 7.2921159e-5
-    model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
-                     terms=[(km.DRAG, km.drag_params(F, rho0, h0, Hs, Req, wE), None)])
-    assert model[0][0, km.FLAGS] & km.NEEDS_VELOCITY
+    model = _drag_model(F)
+    assert model[0][0, km.FLAGS] & km.NEEDS_VELOCITY and model[0][1, km.FLAGS] == km.FIRST_TABLE_SLOT
     t = np.array([0.0, 100.0, 2500.0])
     q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
     U, tau = km.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
     assert np.all(U == 0.0)
     _, _, r, pos, vel = kepler.kepler_many(t, ORB, GM)
     for i in range(t.size):
-        vrel = vel[i] - np.cross([0, 0, wE], pos[i])
-        rho = rho0 * np.exp(-((r[i] - Req) - h0) / Hs)
+        vrel = vel[i] - np.cross([0, 0, WE], pos[i])
+        rho = RHO0 * np.exp(-((r[i] - REQ) - H0) / HS)
         k = 0.5 * rho * vrel @ vrel
         ref = _drag_reference(q[i], k, vrel / np.linalg.norm(vrel), F)
-        np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-11)
+        np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-9)
+
+
+def test_srp_and_magnetic_terms_of_the_model():
+    """SRP with the conical shadow and the pressure scaled by (AU / d)^2; m x B with the field
+    from its table; both against the formulas evaluated here."""
+    F = _facets()
+    ts, _, pos_s, _ = _orbit_samples()
+    sun = np.array([1.2e8, -8.0e7, 3.0e7]) + ts[:, None] * np.array([1.0, 2.0, 0.5])
+    bfield = 3e-5 * np.stack([np.cos(ts / 900.0), np.sin(ts / 700.0), 0.3 * np.ones_like(ts)], axis=1)
+    m = np.array([5e-3, 0.0, 2e-3])
+    P1, AU, RB, RS = 4.5e-3, 1.495978707e8, 6378.137, 696000.0
+    model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
+                     terms=[(km.SRP, km.srp_params(F, P1, AU, km.SHADOW_CONICAL, RB, RS), spline_table(ts, sun)),
+                            (km.MAGNETIC, m, spline_table(ts, bfield))])
+    assert list(model[0][1:, km.FLAGS]) == [km.FIRST_TABLE_SLOT, km.FIRST_TABLE_SLOT + 1]
+    t = np.array([0.0, 1000.0, 2000.0, 3000.0])
+    q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
+    _, tau = km.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
+    _, _, _, pos, _ = kepler.kepler_many(t, ORB, GM)
+    lit = 0
+    for i, ti in enumerate(t):
+        s_i = np.array([1.2e8, -8.0e7, 3.0e7]) + ti * np.array([1.0, 2.0, 0.5])
+        d = s_i - pos[i]
+        nu = shadow(pos[i][None], s_i[None], kind="conical", body_radius=RB, sun_radius=RS)[0]
+        lit += nu > 0
+        ref = _srp_reference(q[i], nu * P1 * (AU / np.linalg.norm(d)) ** 2, d / np.linalg.norm(d), F)
+        np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-9, atol=1e-30)
+        b = 3e-5 * np.array([np.cos(ti / 900.0), np.sin(ti / 700.0), 0.3])
+        np.testing.assert_allclose(tau[i, 1], np.cross(m, qt.rotate_inv(q[i], b)), rtol=1e-7)
+    assert lit >= 2
 
 
 def test_kepler_and_sampled_state_keep_the_radial_numbers():
@@ -113,9 +158,10 @@ def test_kepler_and_sampled_state_keep_the_radial_numbers():
 def test_drag_with_gravity_gradient_in_the_step_loop():
     """A model of two terms through the compiled RHS: q.Q stays 0 and |q| = 1 (tangent)."""
     F = _facets()
+    ts, rs, _, _ = _orbit_samples()
+    dens = spline_table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
     model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
-                     terms=[(km.GRAVITY_GRADIENT, [GM], None),
-                            (km.DRAG, km.drag_params(F, 3e-3, 400.0, 60.0, 6378.137, 7.29e-5), None)])
+                     terms=[(km.GRAVITY_GRADIENT, [GM], None), (km.DRAG, km.drag_params(F, WE), dens)])
     y = np.r_[qt.normalize(rng.normal(size=4)), np.zeros(4)]
     dy = np.empty(8)
     H.rhs(50.0, y, np.array([1e-5, 2e-5, 3e-5]), *model, kp.new_work(), dy)

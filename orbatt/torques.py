@@ -1,0 +1,298 @@
+"""Environment torques on a body of flat plates along a prescribed orbit, with units at the
+boundary (``DESIGN.md`` §10): aerodynamic drag, solar radiation pressure and a residual
+magnetic dipole, with or without the gravity gradient.
+
+The orbit is prescribed, so every field that depends on position and time alone - the
+atmospheric density, the geomagnetic field, the Sun's position - is evaluated before the
+integration by the models of :mod:`orbatt.environment`, at sample times along the orbit, and
+interpolated in the compiled kernel (cubic splines; the tables' errors are stated in
+:mod:`orbatt.environment.tables`). The kernel terms are in :mod:`orbatt.core.model` and
+:mod:`orbatt.core.torques`.
+
+Internal units: kg, km, s (torques in kg km^2 s^-2 = 1 kN m); facet areas given in m^2,
+densities in kg m^-3, dipoles in A m^2 and fields in T at the boundary.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from astropy import units as u
+
+from . import units as U
+from .core import model as km
+from .core import potentials as kp
+from .environment import sun as esun
+from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
+from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sample_along_orbit, tabulate
+from .errors import InputError
+from .orbits.base import OrbitProvider
+from .potentials import Potential
+
+__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES"]
+
+#: names of the terms, as in the Dataset variables ``torque_<name>``
+TERM_NAMES = {km.GRAVITY_GRADIENT: "gravity_gradient", km.DRAG: "drag", km.SRP: "srp", km.MAGNETIC: "magnetic"}
+_AREA = u.m**2
+_LENGTH_M = u.m
+
+
+def _quantity(value, unit, name, example):
+    if isinstance(value, (list, tuple)):
+        return np.array([_quantity(v, unit, f"{name}[{k}]", example) for k, v in enumerate(value)], dtype=np.float64)
+    try:
+        q = u.Quantity(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: cannot read {value!r} as a quantity; write e.g. '{example}'") from None
+    if q.unit == u.one and unit != u.one:
+        raise InputError(f"{name}: {value!r} has no unit; write e.g. '{example}'")
+    try:
+        v = q.to_value(unit)
+    except u.UnitConversionError:
+        raise InputError(f"{name}: {value!r} is not a {unit.physical_type}; write e.g. '{example}'") from None
+    v = np.asarray(v, dtype=np.float64)
+    if not np.all(np.isfinite(v)):
+        raise InputError(f"{name}: {value!r} is not finite")
+    return v
+
+
+class Facet:
+    """A flat plate of the body (body axes), for drag and solar radiation pressure.
+
+    Parameters
+    ----------
+    area : Quantity (area)
+        Positive.
+    normal : array_like (3,)
+        Outward unit normal, body axes (unit length to 1e-9).
+    position : Quantity (3,) (length)
+        Centre of pressure from the centre of mass, body axes.
+    drag_coefficient : float
+        ``C_D`` (default 2.2), non-negative.
+    specular, diffuse : float
+        SRP reflectivities in ``[0, 1]`` with ``specular + diffuse <= 1`` (absorbed: the rest).
+    """
+
+    def __init__(self, area, normal, position, drag_coefficient=2.2, specular=0.0, diffuse=0.0, *, name="facet"):
+        a = float(_quantity(area, _AREA, f"{name}.area", "0.06 m2"))
+        if not a > 0.0:
+            raise InputError(f"{name}.area: {area!r} must be positive")
+        n = np.asarray(normal, dtype=np.float64)
+        if n.shape != (3,) or not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1.0) > 1e-9:
+            raise InputError(f"{name}.normal: {normal!r} is not a unit 3-vector (|n| = 1); normalize it")
+        p = _quantity(position, _LENGTH_M, f"{name}.position", "['0 m', '0.1 m', '0.03 m']")
+        if p.shape != (3,):
+            raise InputError(f"{name}.position: expected 3 lengths, got {position!r}")
+        for key, v in (("drag_coefficient", drag_coefficient), ("specular", specular), ("diffuse", diffuse)):
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
+                raise InputError(f"{name}.{key}: {v!r} is not a number")
+        if drag_coefficient < 0:
+            raise InputError(f"{name}.drag_coefficient: {drag_coefficient!r} must be non-negative")
+        for key, v in (("specular", specular), ("diffuse", diffuse)):
+            if not 0.0 <= v <= 1.0:
+                raise InputError(f"{name}.{key}: {v!r} must lie in [0, 1]")
+        if specular + diffuse > 1.0 + 1e-12:
+            raise InputError(f"{name}: specular + diffuse = {specular + diffuse!r} exceeds 1 (absorbed = 1 - both)")
+        self.area = a * _AREA
+        self.normal = n
+        self.position = p * _LENGTH_M
+        self.drag_coefficient = float(drag_coefficient)
+        self.specular = float(specular)
+        self.diffuse = float(diffuse)
+
+    def row(self, coefficient_km2):
+        """The kernel row ``[c, n, r (km), C_s, C_d]`` (:data:`orbatt.core.torques.FACET_SIZE`)."""
+        return np.r_[coefficient_km2, self.normal, self.position.to_value(u.km), self.specular, self.diffuse]
+
+    def describe(self):
+        return {"area": str(self.area), "normal": self.normal.tolist(), "position": str(self.position),
+                "drag_coefficient": self.drag_coefficient, "specular": self.specular, "diffuse": self.diffuse}
+
+    def __repr__(self):
+        return (f"Facet(area={self.area:.4g}, normal={self.normal.tolist()}, position={self.position}, "
+                f"C_D={self.drag_coefficient}, specular={self.specular}, diffuse={self.diffuse})")
+
+
+class EnvironmentTorques(Potential):
+    """The gravity gradient (optional) plus environment torques along a prescribed orbit.
+
+    Acts as the ``potential`` of :func:`orbatt.propagate` (its kernel model holds every term);
+    the Dataset of a run gets ``torque`` and one ``torque_<term>`` per term (body axes) and
+    the fields along the orbit (:meth:`output_variables`).
+
+    Parameters
+    ----------
+    orbit : OrbitProvider
+        The orbit (GCRS when it has an epoch). SRP, IGRF and NRLMSIS need ``orbit.epoch``.
+    t_end : Quantity (time)
+        The end of the runs (the environment is sampled over ``[t_start, t_end]``).
+    facets : sequence of Facet
+        The plates of the body (drag and SRP need at least one).
+    gravity_gradient : bool
+        Include the gravity gradient (eq. 20).
+    drag : bool
+        Aerodynamic drag of the facets in ``atmosphere`` (an object with ``density(t, r)``,
+        :mod:`orbatt.environment.atmosphere`), the atmosphere turning with the Earth when
+        ``corotation``.
+    srp : bool
+        Solar radiation pressure (flux :data:`orbatt.environment.sun.SRP_FLUX` at 1 AU, the
+        Sun from astropy), with the ``shadow`` model ``"conical"``, ``"cylindrical"`` or
+        ``"none"``.
+    residual_dipole : Quantity (3,) (A m^2), optional
+        The body's magnetic dipole (body axes), in ``magnetic_field`` (an object with
+        ``field(t, r)``, :mod:`orbatt.environment.magnetic`): ``tau = m x B``.
+    t_start : Quantity (time)
+        The start of the sampled span (default 0).
+    """
+
+    name = "environment"
+    dimensionless = False
+
+    def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
+                 residual_dipole=None, atmosphere=None, magnetic_field=None, shadow="conical", corotation=True,
+                 t_start=0.0 * u.s):
+        if not isinstance(orbit, OrbitProvider):
+            raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got {type(orbit).__name__}")
+        self.orbit = orbit
+        t0 = float(_quantity(t_start, u.s, "t_start", "0 s"))
+        t1 = float(_quantity(t_end, u.s, "t_end", "1 d"))
+        if not t1 > t0:
+            raise InputError(f"t_end: {t_end!r} must come after t_start = {t_start!r}")
+        self.facets = list(facets)
+        if not all(isinstance(f, Facet) for f in self.facets):
+            raise InputError("facets: expected a list of orbatt.torques.Facet")
+        if (drag or srp) and not self.facets:
+            raise InputError(f"facets: {'drag' if drag else 'srp'} needs the body's facets ([[body.facets]])")
+        if drag and atmosphere is None:
+            raise InputError("atmosphere: drag needs an atmosphere (exponential or nrlmsis)")
+        if shadow not in ("conical", "cylindrical", "none"):
+            raise InputError(f"shadow: {shadow!r} is not one of 'conical', 'cylindrical', 'none'")
+        epoch = getattr(orbit, "epoch", None)
+        if srp and epoch is None:
+            raise InputError("epoch: SRP needs the orbit's epoch (the Sun's position)")
+        dip = None
+        if residual_dipole is not None:
+            dip = _quantity(residual_dipole, u.A * u.m**2, "residual_dipole", "['0.005 A m2', '0 A m2', '0 A m2']")
+            if dip.shape != (3,):
+                raise InputError(f"residual_dipole: expected 3 components, got {residual_dipole!r}")
+            if magnetic_field is None:
+                raise InputError("magnetic_field: a residual dipole needs a field model (igrf or dipole)")
+        if (atmosphere is not None and drag and not hasattr(atmosphere, "density")) or (
+                magnetic_field is not None and not hasattr(magnetic_field, "field")):
+            raise InputError("atmosphere/magnetic_field: expected models of orbatt.environment")
+        self.gravity_gradient, self.drag, self.srp = bool(gravity_gradient), bool(drag), bool(srp)
+        self.residual_dipole = dip
+        self.atmosphere, self.magnetic_field = atmosphere, magnetic_field
+        self.shadow, self.corotation = shadow, bool(corotation)
+        self.span = (t0, t1)
+        self.kind, self.params, self.table = orbit.kernel()
+        self._model = None
+        self._fields = {}
+
+    # --- the kernel model
+    def _samples(self, step):
+        t0, t1 = self.span
+        # a margin of one step on each side, so that the spline covers the whole run
+        return sample_along_orbit(self.orbit, (t0 - step) * u.s, (t1 + step) * u.s, step * u.s)
+
+    def kernel_model(self):
+        """The compiled model ``(terms, params, table)`` (:mod:`orbatt.core.model`): the orbit,
+        then gravity gradient, drag, SRP, magnetic, in that order (those enabled)."""
+        if self._model is not None:
+            return self._model
+        okind, oparams, otable = km.from_spec(self.kind, self.params, self.table)
+        orbit_row = (int(okind[0, km.KIND]), oparams[okind[0, km.P0]:okind[0, km.P1]],
+                     otable[okind[0, km.R0]:okind[0, km.R1]] if okind[0, km.R1] > okind[0, km.R0] else None)
+        gm = float(self.params[0])
+        rows, self.term_kinds = [], []
+        if self.gravity_gradient:
+            rows.append((km.GRAVITY_GRADIENT, [gm], None))
+        if self.drag:
+            s = self._samples(DENSITY_STEP)
+            dens = tabulate(s, self.atmosphere.density) * 1.0
+            dens[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
+            F = np.array([f.row(f.drag_coefficient * f.area.to_value(u.km**2)) for f in self.facets])
+            rows.append((km.DRAG, km.drag_params(F, EARTH_ROTATION_RATE if self.corotation else 0.0), dens))
+        if self.srp:
+            s = self._samples(SUN_STEP)
+            sun = tabulate(s, lambda t, r: esun.sun_position(t))
+            F = np.array([f.row(f.area.to_value(u.km**2)) for f in self.facets])
+            pressure = esun.SRP_FLUX / esun.SPEED_OF_LIGHT * 1e3  # N m^-2 -> kg km^-1 s^-2
+            shadow = {"none": km.SHADOW_NONE, "cylindrical": km.SHADOW_CYLINDRICAL,
+                      "conical": km.SHADOW_CONICAL}[self.shadow]
+            rows.append((km.SRP, km.srp_params(F, pressure, esun.AU, shadow, R_EARTH_WGS84, esun.R_SUN), sun))
+        if self.residual_dipole is not None:
+            s = self._samples(MAGNETIC_FIELD_STEP)
+            rows.append((km.MAGNETIC, self.residual_dipole * 1e-6, tabulate(s, self.magnetic_field.field)))
+        self.term_kinds = [r[0] for r in rows]
+        self._model = km.build(orbit=orbit_row, terms=rows)
+        return self._model
+
+    @property
+    def time_span(self):
+        """``(t_start, t_end)`` (s): the span the environment was sampled over."""
+        return self.span
+
+    @property
+    def term_names(self):
+        """The names of the terms, in kernel order (``torque_<name>`` in a Dataset)."""
+        self.kernel_model()
+        return [TERM_NAMES[k] for k in self.term_kinds]
+
+    def check_body(self, body):
+        if body.dimensionless:
+            raise InputError("body: environment torques need a dimensional body (inertia with units)")
+
+    def evaluate(self, body, t, q):
+        self.check_body(body)
+        return super().evaluate(body, t, q)
+
+    def term_torques(self, body, t, q):
+        """Each term's body torque ``(N, n_terms, 3)`` (kg km^2 s^-2 = kN m) at the times ``t``
+        (s) and attitudes ``q (N, 4)``."""
+        q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
+        t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
+        _, tau = km.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+        return tau
+
+    def fields(self, t):
+        """The environment along the orbit at the times ``t`` (s): a dict of ``density``
+        (kg m^-3), ``magnetic_field`` (T, inertial), ``sun_direction`` (inertial unit vector)
+        and ``shadow`` (0 umbra .. 1 full Sun), those the terms use; the models evaluated
+        directly, not the kernel's tables."""
+        t = np.asarray(t, dtype=np.float64)
+        out = {}
+        if not (self.drag or self.srp or self.residual_dipole is not None):
+            return out
+        epoch = getattr(self.orbit, "epoch", None)
+        pos, _ = self.orbit.state(t)
+        pos = np.asarray(U.strip(pos, u.km, "position", allow_plain=True), dtype=np.float64)
+        time = None if epoch is None else epoch + t * u.s
+        if self.drag:
+            out["density"] = np.asarray(self.atmosphere.density(time, pos), dtype=np.float64)
+        if self.residual_dipole is not None:
+            out["magnetic_field"] = np.asarray(self.magnetic_field.field(time, pos), dtype=np.float64)
+        if self.srp:
+            sun = np.asarray(esun.sun_position(time), dtype=np.float64)
+            d = sun - pos
+            out["sun_direction"] = d / np.linalg.norm(d, axis=-1, keepdims=True)
+            out["shadow"] = (np.ones(t.shape) if self.shadow == "none" else
+                             esun.shadow(pos, sun, kind=self.shadow, body_radius=R_EARTH_WGS84))
+        return out
+
+    def describe(self):
+        d = {"kind": self.name, "gravity_gradient": self.gravity_gradient, "drag": self.drag, "srp": self.srp,
+             "orbit": self.orbit.describe(), "facets": [f.describe() for f in self.facets],
+             "shadow": self.shadow, "corotation": self.corotation,
+             "sampled_span_s": list(self.span)}
+        if self.residual_dipole is not None:
+            d["residual_dipole_A_m2"] = self.residual_dipole.tolist()
+        if self.atmosphere is not None:
+            d["atmosphere"] = repr(self.atmosphere)
+        if self.magnetic_field is not None:
+            d["magnetic_field"] = repr(self.magnetic_field)
+        return d
+
+    def __repr__(self):
+        terms = ", ".join(self.term_names)
+        return f"EnvironmentTorques({terms}; {len(self.facets)} facets; orbit {self.orbit!r})"
