@@ -74,13 +74,18 @@ def _parser():
 
 def _cmd_run(args):
     from .dataset import write_netcdf
+    from .errors import IntegrationError
     from .scenario import load_scenario
 
     sc = load_scenario(args.scenario)
     out = _output_path(args, sc)
     stem = _plot_stem(args, sc)
     t0 = time.perf_counter()
-    ds = sc.run(method=args.method, progress=not args.quiet)
+    try:
+        ds = sc.run(method=args.method, progress=not args.quiet)
+    except IntegrationError as exc:  # keep what was computed, marked incomplete, as Ctrl-C does
+        _write_partial(exc, out)
+        raise
     wall = time.perf_counter() - t0
     write_netcdf(ds, out)
     if not args.quiet:
@@ -93,6 +98,19 @@ def _cmd_run(args):
         print("orbatt: run interrupted; the file holds what was computed", file=sys.stderr)
         return 130
     return 0
+
+
+def _write_partial(exc, out):
+    """Write the Dataset of a failed run (``exc.dataset``, :meth:`Scenario.run`) to ``out``,
+    marked incomplete, and say so in the error's one-line message."""
+    from .dataset import write_netcdf
+
+    ds = getattr(exc, "dataset", None)
+    if ds is None:
+        return
+    write_netcdf(ds, out)
+    exc.args = (f"{exc.args[0] if exc.args else exc}; the {ds.sizes['time']} outputs computed until then are in "
+                f"{out} (integration_complete = 0)",) + tuple(exc.args[1:])
 
 
 def _output_path(args, sc, *, zarr=False):
