@@ -9,7 +9,8 @@ import secrets
 from pathlib import Path
 
 from ..errors import InputError
-from .netcdf import TEMP_PREFIX, check_engine
+from .atomic import TEMP_PREFIX
+from .netcdf import check_engine
 
 __all__ = ["file_name", "is_orbatt_result", "check_output_path"]
 

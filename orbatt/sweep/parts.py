@@ -5,7 +5,6 @@ Storage and resumption)."""
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +12,7 @@ import numpy as np
 from ..errors import InputError
 from .cases import FORMAT
 from ..dataset import check_engine, decode, encode, encoding, write_netcdf
+from ..dataset.atomic import replacing
 
 __all__ = ["parts_dir", "part_name", "parse_part", "done_parts", "chunk_ranges", "write_reductions", "write_part",
            "write_manifest", "read_manifest", "read_parts", "MANIFEST"]
@@ -99,32 +99,31 @@ def chunk_ranges(missing, chunk_size):
 
 
 def write_reductions(ds, path):
-    """:func:`orbatt.dataset.write_netcdf`, also for a Dataset without ``time`` (reductions only)."""
+    """:func:`orbatt.dataset.write_netcdf`, also for a Dataset without ``time`` (reductions
+    only); atomic either way (:func:`orbatt.dataset.atomic.replacing`)."""
 
     if "time" in ds.dims:
         write_netcdf(ds, path)
         return
     enc = encode(ds)
-    enc.to_netcdf(path, engine=check_engine(None), format="NETCDF4", encoding=encoding(enc, 1, 1))
+    with replacing(path) as tmp:
+        enc.to_netcdf(tmp, engine=check_engine(None), format="NETCDF4", encoding=encoding(enc, 1, 1))
 
 
 def write_part(ds, parts: Path, start, stop):
     """Write a chunk's Dataset as the part of cases ``start .. stop - 1`` (under a temporary
     name, then renamed: a part with its final name is complete); returns its path."""
     final = parts / part_name(start, stop)
-    tmp = parts / f".tmp-{final.name}-{os.getpid()}"
-    write_reductions(ds, tmp)
-    os.replace(tmp, final)  # a part with its final name is complete
+    write_reductions(ds, final)
     return final
 
 
 def write_manifest(parts: Path, sweep):
     """Create ``parts`` with its manifest: format, fingerprint, seed, cases, source."""
     parts.mkdir(parents=True)
-    tmp = parts / f".tmp-{MANIFEST}"
-    tmp.write_text(json.dumps({"format": FORMAT, "fingerprint": sweep.fingerprint, "seed": sweep.seed,
-                               "cases": sweep.cases, "scenario": sweep.source}, indent=1))
-    os.replace(tmp, parts / MANIFEST)
+    with replacing(parts / MANIFEST) as tmp:
+        tmp.write_text(json.dumps({"format": FORMAT, "fingerprint": sweep.fingerprint, "seed": sweep.seed,
+                                   "cases": sweep.cases, "scenario": sweep.source}, indent=1))
 
 
 def read_manifest(parts: Path) -> dict:

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..dataset import global_attrs, open_dataset
+from ..dataset.atomic import replacing
 from ..errors import InputError, SweepError
 from .cases import Sweep, load_sweep
 from .chunk import add_stats, concat_cases, run_chunk
@@ -289,23 +290,12 @@ def _merge_parts(sweep, parts, out_path, zarr_out, run):
         for d in opened:
             add_stats(stats, d.attrs.get("integration_stats"), skip=("members",))
         ds = sweep_global_attrs(concat_cases(opened), sweep, stats, run)
-        tmp = out_path.with_name(f".tmp-{out_path.name}-{os.getpid()}")
-        try:
-            if zarr_out:
-                with warnings.catch_warnings():  # zarr 3 on the 1-character label coordinates
-                    warnings.simplefilter("ignore")
-                    ds.drop_encoding().to_zarr(tmp, mode="w")
-                if out_path.is_dir():
-                    shutil.rmtree(out_path)
-            else:
-                write_reductions(ds, tmp)
-            os.replace(tmp, out_path)
-        except BaseException:
-            if tmp.is_dir():
-                shutil.rmtree(tmp, ignore_errors=True)
-            elif tmp.exists():
-                tmp.unlink()
-            raise
+        if zarr_out:
+            with replacing(out_path, folder=True) as tmp, warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # zarr 3 on the 1-character label coordinates
+                ds.drop_encoding().to_zarr(tmp, mode="w")
+        else:
+            write_reductions(ds, out_path)
     finally:
         for d in opened:
             d.close()
