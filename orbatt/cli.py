@@ -4,7 +4,7 @@ Contract (other tools call these; keep the names)::
 
     orbatt run SCENARIO.toml [-o OUT.nc] [--plot DIR] [--aem FILE] [--method M] [--quiet]
     orbatt sweep SCENARIO.toml [-o OUT.nc] [--scheduler ADDRESS] [--workers N] [--chunk-size N]
-                 [--resume] [--seed S] [--quiet]
+                 [--worker-timeout SECONDS] [--resume] [--seed S] [--quiet]
     orbatt info OUT.nc
     orbatt export OUT.nc --aem FILE [--attitude q|q_orbital] [--case N] [--time-system S] [--ref-frame NAME]
     orbatt plot OUT.nc -o DIR
@@ -57,6 +57,8 @@ def _parser():
                                                           "default: a local cluster on 127.0.0.1; 'synchronous': no Dask")
     s.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes (default: CPU count); "
                                                             "with --scheduler: wait for N workers")
+    s.add_argument("--worker-timeout", type=float, default=120.0, metavar="SECONDS",
+                   help="with --scheduler and --workers: how long to wait for the workers (default 120)")
     s.add_argument("--chunk-size", type=int, metavar="N", help="cases per task (default: [sweep] chunk_size, else "
                                                                "about 4 tasks per worker); results do not depend on it")
     s.add_argument("--resume", action="store_true", help="finish an interrupted sweep: compute only the chunks "
@@ -227,10 +229,13 @@ def _cmd_sweep(args):
               file=sys.stderr)
     try:
         ds = run_sweep(sw, out, scheduler=args.scheduler, workers=args.workers, chunk_size=args.chunk_size,
-                       resume=args.resume, progress=report)
+                       resume=args.resume, progress=report, worker_timeout=args.worker_timeout)
     except KeyboardInterrupt:
-        print(f"\norbatt: interrupted; the finished chunks are in {out.name}.parts/: rerun with --resume to "
-              "compute only the missing ones", file=sys.stderr)
+        if Path(f"{out}.parts").is_dir():
+            print(f"\norbatt: interrupted; the finished chunks are in {out.name}.parts/: rerun with --resume to "
+                  "compute only the missing ones", file=sys.stderr)
+        else:
+            print("\norbatt: interrupted before any chunk finished; nothing was written", file=sys.stderr)
         return 130
     if not args.quiet:
         import json
