@@ -176,11 +176,10 @@ def _aem_path(args, sc, out):
     if sc.spec.dimensionless or sc.orbit is None or getattr(sc.orbit, "epoch", None) is None:
         raise InputError("--aem: an AEM needs absolute times and this scenario has no epoch (no [orbit] with "
                          "epoch); add one or leave --aem out")
-    aem = _checked_aem(args.aem, getattr(sc, "path", None))
-    if os.path.abspath(aem) == os.path.abspath(out):
+    if os.path.abspath(args.aem) == os.path.abspath(out):
         raise InputError(f"--aem: {args.aem!r} is also the NetCDF output; give the AEM another name such as "
                          f"{Path(out).stem + '.aem'!r}")
-    return aem
+    return _checked_aem(args.aem, getattr(sc, "path", None))
 
 
 def _checked_aem(path, source=None):
@@ -206,6 +205,7 @@ def _cmd_export(args):
     if args.ref_frame:
         options["ref_frame_a"] = args.ref_frame
     write_aem(ds, aem, **options)
+    print(aem)
     return 0
 
 
