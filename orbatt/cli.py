@@ -2,10 +2,11 @@
 
 Contract (other tools call these; keep the names)::
 
-    orbatt run SCENARIO.toml [-o OUT.nc] [--plot DIR] [--method M] [--quiet]
+    orbatt run SCENARIO.toml [-o OUT.nc] [--plot DIR] [--aem FILE] [--method M] [--quiet]
     orbatt sweep SCENARIO.toml [-o OUT.nc] [--scheduler ADDRESS] [--workers N] [--chunk-size N]
-                 [--resume] [--seed S] [--quiet]
+                 [--worker-timeout SECONDS] [--resume] [--seed S] [--quiet]
     orbatt info OUT.nc
+    orbatt export OUT.nc --aem FILE [--attitude q|q_orbital] [--case N] [--time-system S] [--ref-frame NAME]
     orbatt plot OUT.nc -o DIR
     orbatt scenarios
     orbatt --version
@@ -43,6 +44,8 @@ def _parser():
     r.add_argument("scenario", help="scenario TOML file (or the name of a shipped scenario)")
     r.add_argument("-o", "--output", help="output NetCDF file (default: SCENARIO.nc in the current folder)")
     r.add_argument("--plot", metavar="DIR", help="also write PNG figures to DIR")
+    r.add_argument("--aem", metavar="FILE", help="also write the attitude q as a CCSDS AEM (needs an epoch; "
+                                                 "as 'orbatt export' with its defaults)")
     r.add_argument("--method", help="override [integration] method")
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
@@ -54,6 +57,8 @@ def _parser():
                                                           "default: a local cluster on 127.0.0.1; 'synchronous': no Dask")
     s.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes (default: CPU count); "
                                                             "with --scheduler: wait for N workers")
+    s.add_argument("--worker-timeout", type=float, default=120.0, metavar="SECONDS",
+                   help="with --scheduler and --workers: how long to wait for the workers (default 120)")
     s.add_argument("--chunk-size", type=int, metavar="N", help="cases per task (default: [sweep] chunk_size, else "
                                                                "about 4 tasks per worker); results do not depend on it")
     s.add_argument("--resume", action="store_true", help="finish an interrupted sweep: compute only the chunks "
@@ -64,6 +69,17 @@ def _parser():
     i = sub.add_parser("info", help="summarize a result file")
     i.add_argument("file")
 
+    e = sub.add_parser("export", help="write a result file's attitude as a CCSDS AEM (KVN)")
+    e.add_argument("file", help="a NetCDF file written by 'orbatt run' (or 'orbatt sweep' with trajectories)")
+    e.add_argument("--aem", metavar="FILE", required=True, help="the AEM file to write")
+    e.add_argument("--attitude", choices=("q", "q_orbital"), default="q",
+                   help="q: body relative to the inertial frame (default); q_orbital: relative to RTN")
+    e.add_argument("--case", type=int, metavar="N", help="the member of an ensemble or sweep to write")
+    e.add_argument("--time-system", default="UTC", metavar="S", help="UTC (default), TAI, TT, TDB, TCB or TCG; "
+                   "TDB/TCB epochs differ between astropy and Orekit by tens of microseconds")
+    e.add_argument("--ref-frame", metavar="NAME", help="REF_FRAME_A: the inertial frame of your orbit elements "
+                   "(default EME2000; RTN for q_orbital)")
+
     pl = sub.add_parser("plot", help="write PNG figures of a result file")
     pl.add_argument("file")
     pl.add_argument("-o", "--output", required=True, metavar="DIR")
@@ -73,18 +89,28 @@ def _parser():
 
 
 def _cmd_run(args):
-    from .dataset import write_netcdf
+    from .dataset import write_aem, write_netcdf
+    from .errors import IntegrationError
     from .scenario import load_scenario
 
     sc = load_scenario(args.scenario)
     out = _output_path(args, sc)
     stem = _plot_stem(args, sc)
+    aem = _aem_path(args, sc, out)
     t0 = time.perf_counter()
-    ds = sc.run(method=args.method, progress=not args.quiet)
+    try:
+        ds = sc.run(method=args.method, progress=not args.quiet)
+    except IntegrationError as exc:  # keep what was computed, marked incomplete, as Ctrl-C does
+        _write_partial(exc, out)
+        raise
     wall = time.perf_counter() - t0
     write_netcdf(ds, out)
     if not args.quiet:
         print(summary(ds, title=f"{sc.name} -> {out}", wall=wall))
+    if aem is not None:
+        write_aem(ds, aem)
+        if not args.quiet:
+            print(f"AEM: {aem}")
     if args.plot:
         for f in write_plots(ds, args.plot, stem=stem):
             if not args.quiet:
@@ -93,6 +119,19 @@ def _cmd_run(args):
         print("orbatt: run interrupted; the file holds what was computed", file=sys.stderr)
         return 130
     return 0
+
+
+def _write_partial(exc, out):
+    """Write the Dataset of a failed run (``exc.dataset``, :meth:`Scenario.run`) to ``out``,
+    marked incomplete, and say so in the error's one-line message."""
+    from .dataset import write_netcdf
+
+    ds = getattr(exc, "dataset", None)
+    if ds is None:
+        return
+    write_netcdf(ds, out)
+    exc.args = (f"{exc.args[0] if exc.args else exc}; the {ds.sizes['time']} outputs computed until then are in "
+                f"{out} (integration_complete = 0)",) + tuple(exc.args[1:])
 
 
 def _output_path(args, sc, *, zarr=False):
@@ -127,6 +166,49 @@ def _plot_stem(args, sc):
     return sc.name
 
 
+def _aem_path(args, sc, out):
+    """The ``--aem`` file of ``run``, checked before the run: the scenario needs an epoch, and
+    the path the checks of ``-o`` (:func:`_checked_aem`), other than the NetCDF output."""
+    if not args.aem:
+        return None
+    from .errors import InputError
+
+    if sc.spec.dimensionless or sc.orbit is None or getattr(sc.orbit, "epoch", None) is None:
+        raise InputError("--aem: an AEM needs absolute times and this scenario has no epoch (no [orbit] with "
+                         "epoch); add one or leave --aem out")
+    if os.path.abspath(args.aem) == os.path.abspath(out):
+        raise InputError(f"--aem: {args.aem!r} is also the NetCDF output; give the AEM another name such as "
+                         f"{Path(out).stem + '.aem'!r}")
+    return _checked_aem(args.aem, getattr(sc, "path", None))
+
+
+def _checked_aem(path, source=None):
+    """``--aem``: a writable path that is not ``source`` (the scenario or result read) and
+    holds nothing but an earlier orbatt AEM (:func:`orbatt.dataset.check_output_path`)."""
+    from .dataset import check_output_path
+    from .dataset.aem import is_orbatt_aem
+    from .errors import InputError
+
+    p = Path(path)
+    if source is not None and Path(source).is_file() and p.exists() and os.path.samefile(source, p):
+        raise InputError(f"--aem: {path!r} is the file being read; give another path such as 'attitude.aem'")
+    return check_output_path(p, what="--aem", ours=is_orbatt_aem)
+
+
+def _cmd_export(args):
+    from .dataset import open_dataset, write_aem
+
+    src = _existing(args.file)
+    aem = _checked_aem(args.aem, src)
+    ds = open_dataset(src, load=True)
+    options = {"attitude": args.attitude, "case": args.case, "time_system": args.time_system}
+    if args.ref_frame:
+        options["ref_frame_a"] = args.ref_frame
+    write_aem(ds, aem, **options)
+    print(aem)
+    return 0
+
+
 def _cmd_sweep(args):
     from .scenario import load_scenario
     from .sweep import Sweep, run_sweep
@@ -147,10 +229,13 @@ def _cmd_sweep(args):
               file=sys.stderr)
     try:
         ds = run_sweep(sw, out, scheduler=args.scheduler, workers=args.workers, chunk_size=args.chunk_size,
-                       resume=args.resume, progress=report)
+                       resume=args.resume, progress=report, worker_timeout=args.worker_timeout)
     except KeyboardInterrupt:
-        print(f"\norbatt: interrupted; the finished chunks are in {out.name}.parts/: rerun with --resume to "
-              "compute only the missing ones", file=sys.stderr)
+        if Path(f"{out}.parts").is_dir():
+            print(f"\norbatt: interrupted; the finished chunks are in {out.name}.parts/: rerun with --resume to "
+                  "compute only the missing ones", file=sys.stderr)
+        else:
+            print("\norbatt: interrupted before any chunk finished; nothing was written", file=sys.stderr)
         return 130
     if not args.quiet:
         import json
@@ -301,7 +386,7 @@ def main(argv=None) -> int:
         warnings.showwarning = one_line
     try:
         return {"run": _cmd_run, "sweep": _cmd_sweep, "info": _cmd_info, "plot": _cmd_plot,
-                "scenarios": _cmd_scenarios}[args.command](args)
+                "export": _cmd_export, "scenarios": _cmd_scenarios}[args.command](args)
     except OrbattError as exc:
         if args.debug:
             raise

@@ -43,6 +43,17 @@ Times: ``time`` (seconds since the Dataset's ``epoch``) becomes absolute epochs
 (UTC by default; TAI, TT, TDB, TCB, TCG also accepted) with nanosecond digits. Quaternion
 components are written with the shortest decimal that gives back the same float64, so a
 read gives the same bits.
+
+Interoperability: files in UTC, TAI or TT give the same instants in astropy (orbatt) and
+Orekit (checked with Orekit 13, ``AemParser``: exactly). In TDB and TCB the two differ by
+tens of microseconds (different TDB - TT models), about 1e-6 rad of attitude for a body
+turning at 0.05 rad/s: write UTC, TAI or TT when another tool reads the file.
+
+Form: KVN lines ``KEY = value`` (CCSDS 504.0-B-2; keys padded to a column, then `` = ``).
+:func:`read_aem` also reads the ``KEY= value`` lines that earlier versions of orbatt wrote,
+and any spacing around ``=``. The command line writes an AEM with ``orbatt run
+SCENARIO.toml --aem FILE`` or ``orbatt export RESULT.nc --aem FILE``; the file is written
+atomically (:mod:`orbatt.dataset.atomic`).
 """
 from __future__ import annotations
 
@@ -56,8 +67,9 @@ import numpy as np
 from .. import quaternion as qt
 from ..epoch import parse_epoch
 from ..errors import InputError
+from .atomic import replacing
 
-__all__ = ["write_aem", "read_aem", "Aem", "AemSegment", "aem_direction_cosine_matrix"]
+__all__ = ["write_aem", "read_aem", "is_orbatt_aem", "Aem", "AemSegment", "aem_direction_cosine_matrix"]
 
 _SCALES = {"UTC": "utc", "TAI": "tai", "TT": "tt", "TDB": "tdb", "TCB": "tcb", "TCG": "tcg"}
 # CCSDS spacecraft frame names (SANA): a frame whose name starts with one of these is on the body
@@ -90,7 +102,7 @@ def aem_direction_cosine_matrix(Q):
 
 
 def _kvn(key, value):
-    return f"{key:<{_PAD}}= {value}"
+    return f"{key:<{_PAD}} = {value}"
 
 
 def _fmt_time(times, scale):
@@ -111,7 +123,9 @@ def write_aem(ds, path=None, *, attitude="q", case=None, object_name="SATELLITE"
         An orbatt Dataset (:func:`orbatt.dataset.to_dataset`) with an ``epoch`` (dimensional
         problems only: a dimensionless time has no calendar).
     path : str or os.PathLike, optional
-        Where to write; the text is returned in any case.
+        Where to write (atomically: a temporary file beside it, renamed); the text is
+        returned in any case. Any file there is replaced: check it first
+        (:func:`orbatt.dataset.check_output_path` with ``ours=is_orbatt_aem``).
     attitude : {"q", "q_orbital"}
         ``"q"``: the body relative to the inertial frame ``S`` (default frame name
         ``EME2000``); ``"q_orbital"``: relative to the orbital frame (default ``RTN``).
@@ -207,9 +221,23 @@ def write_aem(ds, path=None, *, attitude="q", case=None, object_name="SATELLITE"
     lines += ["DATA_STOP", ""]
     text = "\n".join(lines)
     if path is not None:
-        with open(os.fspath(path), "w", encoding="ascii", newline="\n") as fh:
+        with replacing(path) as tmp, open(tmp, "w", encoding="ascii", newline="\n") as fh:
             fh.write(text)
     return text
+
+
+def is_orbatt_aem(path) -> bool:
+    """True when ``path`` is a file that :func:`write_aem` wrote: it starts with
+    ``CCSDS_AEM_VERS`` and its first comment names orbatt (reads the first 4 KiB only)."""
+    try:
+        with open(os.fspath(path), "rb") as fh:
+            head = fh.read(4096).decode("ascii", errors="replace")
+    except OSError:
+        return False
+    lines = [ln.strip() for ln in head.splitlines()]
+    comments = [ln for ln in lines if ln.startswith("COMMENT")]
+    return bool(lines) and lines[0].startswith("CCSDS_AEM_VERS") and bool(comments) and \
+        comments[0].split()[1:2] == ["orbatt"]
 
 
 @dataclass

@@ -13,9 +13,8 @@ from __future__ import annotations
 
 import json
 import os
-import secrets
+import shutil
 import signal
-import stat
 import sys
 import threading
 from contextlib import contextmanager
@@ -24,14 +23,13 @@ import numpy as np
 import xarray as xr
 
 from ..errors import InputError
+from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, orbatt_version, utc_now
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
            "TEMP_PREFIX", "DEFAULT_CHUNK_TIME"]
 
 DEFAULT_CHUNK_TIME = 16384
-#: name prefix of the temporary file written beside the target before the rename
-TEMP_PREFIX = ".tmp-"
 
 
 def _default_engine():
@@ -151,18 +149,21 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
     ``time`` is an unlimited dimension. Values are stored as float64 without fill values:
     reading gives them back bit for bit.
 
-    A new file (``append=False``, or ``append=True`` on a missing file) is written to a
-    temporary file beside ``path`` (name starting with ``.tmp-``), flushed to disk and renamed
-    over ``path``: a kill during the write leaves the earlier file (and possibly a stray
-    ``.tmp-`` file), never a partial one under ``path``. An append writes into ``path`` in place.
-    Use :func:`orbatt.dataset.paths.check_output_path` first to refuse paths that are not
-    orbatt results.
+    Every write is atomic (:mod:`orbatt.dataset.atomic`): a new file is written to a temporary
+    file beside ``path`` (``.tmp-<name>.<pid>.<hex>``), an append goes into a copy of ``path``
+    there (so it costs a copy of the file), then it is flushed to disk and renamed over
+    ``path``. A kill during the write leaves the earlier file, never a partial one under
+    ``path``; the temporary file it leaves is removed by the next write of ``path``. Use
+    :func:`orbatt.dataset.paths.check_output_path` first to refuse paths that are not orbatt
+    results.
     """
     engine = check_engine(engine)
     path = os.fspath(path)
     with _interrupts_deferred(path) as interrupted:
         if append and os.path.exists(path):
-            _append(ds, path, engine)
+            with replacing(path) as tmp:  # append to a copy, renamed over path
+                shutil.copyfile(path, tmp)
+                _append(ds, tmp, engine, name=path)
         else:
             enc_ds = encode(ds)
             _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
@@ -173,38 +174,9 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
 
 def _write_replacing(ds: xr.Dataset, path, **to_netcdf):
     """``ds.to_netcdf`` into a new temporary file beside ``path`` (``.tmp-<name>.<pid>.<hex>``),
-    flushed to disk, then renamed over ``path``: ``path`` is the earlier file or the complete new
-    one, never a partial one. The temporary file is removed on any exception; it keeps the mode
-    of the file it replaces (a new file gets the default mode of the umask)."""
-    folder, name = os.path.split(os.path.abspath(path))
-    tmp = os.path.join(folder, f"{TEMP_PREFIX}{name}.{os.getpid()}.{secrets.token_hex(4)}")
-    os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
-    try:
+    flushed to disk, then renamed over ``path`` (:func:`orbatt.dataset.atomic.replacing`)."""
+    with replacing(path) as tmp:
         ds.to_netcdf(tmp, **to_netcdf)
-        fd = os.open(tmp, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        try:
-            os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))
-        except FileNotFoundError:
-            pass
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-    try:  # the rename itself to disk
-        fd = os.open(folder, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-    except OSError:
-        pass
 
 
 @contextmanager
@@ -235,7 +207,10 @@ def _interrupts_deferred(path):
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-def _append(ds: xr.Dataset, path, engine):
+def _append(ds: xr.Dataset, path, engine, name=None):
+    """Append ``ds``'s samples into the file ``path`` in place (``name``: the file named in
+    messages)."""
+    name = path if name is None else name
     piece = encode(ds)
     t_new = piece["time"].values
     if engine == "netcdf4":
@@ -251,12 +226,12 @@ def _append(ds: xr.Dataset, path, engine):
         names_file = set(f.variables)
         names_piece = set(piece.variables)
         if names_file != names_piece:
-            raise InputError(f"append: {path} has variables {sorted(names_file - names_piece)} the new "
+            raise InputError(f"append: {name} has variables {sorted(names_file - names_piece)} the new "
                              f"samples lack, and they have {sorted(names_piece - names_file)} it lacks")
         tvar = f.variables["time"]
         units_file = tvar.attrs["units"] if engine == "h5netcdf" else tvar.getncattr("units")
         if units_file != piece["time"].attrs["units"]:
-            raise InputError(f"append: time units differ ({units_file!r} in {path}, "
+            raise InputError(f"append: time units differ ({units_file!r} in {name}, "
                              f"{piece['time'].attrs['units']!r} new); different epochs cannot be appended")
         n0 = f.dimensions["time"].size if engine == "h5netcdf" else len(f.dimensions["time"])
         start = 0
@@ -265,8 +240,8 @@ def _append(ds: xr.Dataset, path, engine):
             if t_new.size and t_new[0] == last:
                 start = 1
             if t_new.size > start and t_new[start] <= last:
-                raise InputError(f"append: new samples start at time {t_new[start]!r}, not after the "
-                                 f"file's last time {last!r}")
+                raise InputError(f"append: new samples start at time {float(t_new[start])!r}, not after the "
+                                 f"last time {last!r} of {name}; append only later samples")
         n = t_new.size - start
         if n <= 0:
             return
@@ -326,8 +301,9 @@ def _sum_stats(a, b):
 class NetCDFWriter:
     """Write a long run to a netCDF file piece by piece, as it goes.
 
-    Each :meth:`append` leaves a complete, readable file behind (the file is opened and closed
-    per piece), so an interrupted run keeps what was written.
+    Each :meth:`append` leaves a complete, readable file behind (each piece is added to a copy
+    of the file, renamed over it: :func:`write_netcdf`), so a run interrupted or killed at any
+    moment keeps what was written before.
 
     Parameters
     ----------

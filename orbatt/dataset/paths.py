@@ -9,7 +9,8 @@ import secrets
 from pathlib import Path
 
 from ..errors import InputError
-from .netcdf import TEMP_PREFIX, check_engine
+from .atomic import TEMP_PREFIX
+from .netcdf import check_engine
 
 __all__ = ["file_name", "is_orbatt_result", "check_output_path"]
 
@@ -91,7 +92,7 @@ def is_orbatt_result(path) -> bool:
         return False
 
 
-def check_output_path(path, *, what="-o", zarr=False):
+def check_output_path(path, *, what="-o", zarr=False, ours=None):
     """Refuse an output path that cannot or must not be written, before any computation.
 
     Parameters
@@ -102,6 +103,9 @@ def check_output_path(path, *, what="-o", zarr=False):
         The option or field named in error messages (``"-o"``, ``"name"``).
     zarr : bool
         Accept an existing Zarr store (a folder) that orbatt wrote at ``path``.
+    ours : callable, optional
+        ``ours(path) -> bool``: whether an existing file is one orbatt may replace (default
+        :func:`is_orbatt_result`; :func:`orbatt.dataset.aem.is_orbatt_aem` for AEM files).
 
     Returns
     -------
@@ -113,7 +117,7 @@ def check_output_path(path, *, what="-o", zarr=False):
     InputError
         ``path`` is a folder; its folder is missing, not a folder, or not writable (tested by
         creating and removing a ``.tmp-`` file there); or ``path`` exists and is not an orbatt
-        result (:func:`is_orbatt_result`): only earlier orbatt results are overwritten.
+        result (``ours``): only earlier orbatt results are overwritten.
     """
     s = os.fspath(path)
     bad = [c for c in s if ord(c) < 32 or ord(c) == 127]
@@ -135,7 +139,7 @@ def check_output_path(path, *, what="-o", zarr=False):
     except OSError as exc:
         raise InputError(f"{what}: cannot write in the folder {str(folder)!r} of {s!r} "
                          f"({exc.strerror or exc}); give a writable folder") from None
-    if (p.exists() or p.is_symlink()) and not is_orbatt_result(p):
+    if (p.exists() or p.is_symlink()) and not (ours or is_orbatt_result)(p):
         raise InputError(f"{what}: {s!r} exists and is not an orbatt result; orbatt overwrites only its own "
                          "results: give another path or remove that file")
     return p

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from .. import units as U
 from ..body import RigidBody
-from ..errors import InputError, ScenarioError
+from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
                     build_rebound_orbit)
 from .fields import FieldContext
@@ -78,6 +78,14 @@ class Scenario:
             Progress bar (True) or callback; off by default.
         **overrides
             Further keyword arguments for :func:`orbatt.propagate` (e.g. ``rtol``).
+
+        Raises
+        ------
+        IntegrationError
+            The integration could not continue (non-finite state, ``max_steps``, ...). Its
+            ``dataset`` attribute holds what was computed until then, as a Dataset marked
+            incomplete (``integration_complete = 0``; None if nothing was), its
+            ``trajectory`` the same as a :class:`~orbatt.trajectory.Trajectory`.
         """
 
         kw = dict(self.settings)
@@ -87,6 +95,13 @@ class Scenario:
             traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
         except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
             raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
+        except IntegrationError as exc:
+            partial = getattr(exc, "trajectory", None)
+            exc.dataset = self._dataset(partial) if partial is not None and partial.t.size else None
+            raise
+        return self._dataset(traj)
+
+    def _dataset(self, traj):
         epoch = self.orbit.epoch if self.orbit is not None else None
         return to_dataset(traj, scenario_text=self.text, epoch=epoch, title=f"orbatt: {self.name}")
 

@@ -13,7 +13,7 @@ from ..errors import InputError
 from ..scenario import load_scenario
 from ..scenario.sweep_schema import parameter_units
 from .chunk import compute_chunk
-from .sampling import draw_samples, nominal_values
+from .sampling import SAMPLING_VERSION, draw_samples, nominal_values
 
 __all__ = ["Sweep", "load_sweep", "FORMAT"]
 
@@ -50,7 +50,9 @@ class Sweep:
     nominal : dict
         Nominal value of every parameter (internal units).
     fingerprint : str
-        Hash of the scenario text, seed and number of cases (checked on resume).
+        Hash of the scenario text, seed, number of cases and the version of the drawing code
+        (:data:`~orbatt.sweep.sampling.SAMPLING_VERSION`); written into the parts folder's
+        manifest and every part, checked on resume and before the merge.
     """
 
     def __init__(self, scenario, seed=None):
@@ -73,7 +75,8 @@ class Sweep:
         dimless = scenario.spec.dimensionless
         self.units = parameter_units(dimless)
         self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, self.units)
-        h = hashlib.sha256(f"{FORMAT}\n{self.seed}\n{self.cases}\n".encode() + scenario.text.encode())
+        h = hashlib.sha256(f"{FORMAT}\nsampling {SAMPLING_VERSION}\n{self.seed}\n{self.cases}\n".encode()
+                           + scenario.text.encode())
         self.fingerprint = h.hexdigest()[:32]
 
     @property

@@ -8,6 +8,7 @@ import math
 import os
 import secrets
 import shutil
+import sys
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -16,11 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from ..dataset import global_attrs, open_dataset
+from ..dataset.atomic import replacing
 from ..errors import InputError, SweepError
 from .cases import Sweep, load_sweep
 from .chunk import add_stats, concat_cases, run_chunk
-from .parts import (chunk_ranges, done_parts, parts_dir, read_manifest, read_parts, write_manifest, write_part,
-                    write_reductions)
+from .parts import (chunk_ranges, done_parts, parse_part, parts_dir, read_manifest, read_parts, write_manifest,
+                    write_part, write_reductions)
 
 __all__ = ["run_sweep", "ChunkInfo", "open_client", "sweep_global_attrs", "MAX_AUTO_CHUNK"]
 
@@ -43,7 +45,7 @@ class ChunkInfo:
     extra: dict = field(default_factory=dict)
 
 def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=None, resume=False,
-              progress=None, client=None, keep_parts=False):
+              progress=None, client=None, keep_parts=False, worker_timeout=120.0, notify=None):
     """Run a sweep on Dask, chunk by chunk, and return its Dataset.
 
     Parameters
@@ -76,6 +78,11 @@ def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=No
         Use this client (its cluster is left running); overrides ``scheduler``/``workers``.
     keep_parts : bool
         Keep ``OUTPUT.parts/`` after merging.
+    worker_timeout : float
+        With a scheduler address and ``workers``: seconds to wait for them (default 120).
+    notify : callable, optional
+        Receives one-line messages about waits (``"waiting up to 120 s for 4 workers at
+        tcp://...: 1 connected"``); default: printed on stderr.
 
     Returns
     -------
@@ -89,21 +96,36 @@ def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=No
     Raises
     ------
     InputError
-        Bad arguments, a parts folder without ``resume``, a parts folder of another sweep,
-        an unreachable scheduler.
+        Bad arguments, a parts folder without ``resume``, a parts folder (or a part) of
+        another sweep, an unreachable scheduler, workers that did not connect in time.
+
+    Notes
+    -----
+    A run that fails before writing any part (e.g. the scheduler cannot be reached) removes
+    the ``OUTPUT.parts/`` folder it created, so the next run starts afresh.
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)
     _check_arguments(workers, chunk_size, scheduler)
+    if isinstance(worker_timeout, bool) or not isinstance(worker_timeout, (int, float)) or \
+            not 0 < worker_timeout < math.inf:
+        raise InputError(f"worker_timeout: {worker_timeout!r} must be a positive number of seconds")
     out_path, parts, zarr_out = _output(output, resume)
     covered = np.zeros(sweep.cases, dtype=bool)
     reused = []
+    created = parts is not None and not parts.exists()
     if parts is not None:
         sweep, reused, covered, complete = _open_parts(sweep, parts, out_path, zarr_out, resume)
         if complete:
             return open_dataset(out_path)
-    results, run = _execute(sweep, parts, reused, covered, scheduler=scheduler, workers=workers,
-                            chunk_size=chunk_size, progress=progress, client=client)
+    try:
+        results, run = _execute(sweep, parts, reused, covered, scheduler=scheduler, workers=workers,
+                                chunk_size=chunk_size, progress=progress, client=client,
+                                connect=dict(timeout=worker_timeout, notify=notify))
+    except BaseException:
+        if created and not any(parse_part(p.name) for p in parts.iterdir()):
+            shutil.rmtree(parts, ignore_errors=True)  # nothing of this run to resume: as if never started
+        raise
     import dask
 
     with dask.config.set(scheduler="synchronous"):
@@ -175,7 +197,7 @@ def _open_parts(sweep, parts, out_path, zarr_out, resume):
             raise InputError(f"resume: {str(parts)!r} belongs to another sweep (the scenario text, seed or number "
                              f"of cases changed: fingerprint {man.get('fingerprint')} != {sweep.fingerprint}); "
                              "delete it or rerun without changes")
-        reused, covered = done_parts(parts, sweep.cases)
+        reused, covered = done_parts(parts, sweep.cases, sweep.fingerprint)
         return sweep, reused, covered, False
     if resume and out_path.exists() and not zarr_out:
         try:
@@ -191,7 +213,7 @@ def _open_parts(sweep, parts, out_path, zarr_out, resume):
     return sweep, [], np.zeros(sweep.cases, dtype=bool), False
 
 
-def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, progress, client):
+def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, progress, client, connect):
     """Compute the missing chunks; ``(results, run)``: the chunk Datasets kept in memory
     (without ``parts``) and the ``sweep_run`` record."""
     n_cases = sweep.cases
@@ -205,7 +227,7 @@ def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, p
     n_workers = 1
     if not synchronous:
         if client is None:
-            client, own = open_client(scheduler, workers)
+            client, own = open_client(scheduler, workers, **connect)
             owned_client = True
         n_workers = max(1, sum(client.nthreads().values()))  # worker threads: tasks that run at once
     results = []
@@ -223,7 +245,7 @@ def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, p
             state["compute_s"] += float(ds.attrs.pop("sweep_chunk_seconds", 0.0))
             path = None
             if parts is not None:
-                path = write_part(ds, parts, a, b)
+                path = write_part(ds, parts, a, b, sweep.fingerprint)
             else:
                 results.append(ds)
             state["k_done"] += 1
@@ -283,29 +305,19 @@ def _run_on_dask(client, sweep, todo, parts, handle):
 def _merge_parts(sweep, parts, out_path, zarr_out, run):
     """Merge every part into ``out_path`` (netCDF or Zarr), written under a temporary name
     and renamed; the parts stay if anything fails (``--resume`` merges again)."""
-    opened = read_parts(parts, sweep.cases, lazy="trajectory" in sweep.spec.outputs)
+    opened = read_parts(parts, sweep.cases, lazy="trajectory" in sweep.spec.outputs,
+                        fingerprint=sweep.fingerprint)
     try:
         stats = {}
         for d in opened:
             add_stats(stats, d.attrs.get("integration_stats"), skip=("members",))
         ds = sweep_global_attrs(concat_cases(opened), sweep, stats, run)
-        tmp = out_path.with_name(f".tmp-{out_path.name}-{os.getpid()}")
-        try:
-            if zarr_out:
-                with warnings.catch_warnings():  # zarr 3 on the 1-character label coordinates
-                    warnings.simplefilter("ignore")
-                    ds.drop_encoding().to_zarr(tmp, mode="w")
-                if out_path.is_dir():
-                    shutil.rmtree(out_path)
-            else:
-                write_reductions(ds, tmp)
-            os.replace(tmp, out_path)
-        except BaseException:
-            if tmp.is_dir():
-                shutil.rmtree(tmp, ignore_errors=True)
-            elif tmp.exists():
-                tmp.unlink()
-            raise
+        if zarr_out:
+            with replacing(out_path, folder=True) as tmp, warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # zarr 3 on the 1-character label coordinates
+                ds.drop_encoding().to_zarr(tmp, mode="w")
+        else:
+            write_reductions(ds, out_path)
     finally:
         for d in opened:
             d.close()
@@ -332,10 +344,12 @@ def sweep_global_attrs(ds, sweep, stats, run):
     return ds
 
 
-def open_client(scheduler, workers):
+def open_client(scheduler, workers, *, timeout=120.0, notify=None):
     """A Dask client: ``(client, cluster_or_None)``. ``scheduler`` None: a local cluster of
     ``workers`` single-threaded processes on 127.0.0.1 (returned, to close); an address: a
-    running scheduler (wait for ``workers`` of its workers)."""
+    running scheduler; with ``workers``, wait up to ``timeout`` seconds until that many of
+    its workers are connected, saying so once through ``notify`` (default: a line on stderr)
+    when fewer are."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover - dask is a dependency
@@ -353,9 +367,19 @@ def open_client(scheduler, workers):
         raise InputError(f"scheduler: cannot connect to {scheduler!r} ({exc}); start one with 'dask scheduler' "
                          "and workers with 'dask worker ADDRESS', or leave --scheduler out for a local cluster") from None
     if workers:
-        try:
-            client.wait_for_workers(workers, timeout=120)
-        except TimeoutError:
-            client.close()
-            raise InputError(f"workers: {workers} workers did not connect to {scheduler!r} within 120 s") from None
+        have = len(client.nthreads())
+        if have < workers:
+            if notify is None:
+                def notify(line):
+                    print(line, file=sys.stderr, flush=True)
+            notify(f"orbatt sweep: waiting up to {timeout:g} s for {workers} workers at {scheduler}: {have} connected "
+                   "(start them with 'dask worker ADDRESS')")
+            try:
+                client.wait_for_workers(workers, timeout=timeout)
+            except TimeoutError:
+                have = len(client.nthreads())
+                client.close()
+                raise InputError(f"workers: {workers} workers did not connect to {scheduler!r} within {timeout:g} s "
+                                 f"({have} connected); start more with 'dask worker {scheduler}', ask for fewer, "
+                                 "or wait longer (--worker-timeout)") from None
     return client, None

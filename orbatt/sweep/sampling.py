@@ -16,9 +16,12 @@ from ..body import triangle_violation
 from ..errors import InputError
 from ..scenario.sweep_schema import INERTIA_PARAMETERS, PARAMETERS, SweepSpec, in_limits, limits_text
 
-__all__ = ["nominal_values", "nominal_rates", "draw_samples", "MAX_RESAMPLE_ROUNDS"]
+__all__ = ["nominal_values", "nominal_rates", "draw_samples", "MAX_RESAMPLE_ROUNDS", "SAMPLING_VERSION"]
 
 MAX_RESAMPLE_ROUNDS = 1000
+#: version of the drawing code: raise it whenever a seed would give other samples (it enters
+#: every sweep's fingerprint, so parts drawn by other code are not merged)
+SAMPLING_VERSION = 1
 
 
 def nominal_values(scenario):
