@@ -73,7 +73,7 @@ class RigidBody:
                 inertia = u.Quantity(inertia)
             if inertia.unit.physical_type != "moment of inertia":
                 raise InputError(f"inertia: {inertia} has the wrong dimension; expected mass x length^2, "
-                                 f"e.g. [400, 500, 600] kg km2")
+                                 f"e.g. [400, 500, 600] kg km^2")
         value = U.strip(inertia, U.INERTIA, "inertia", allow_plain=True)
         if value.shape != (3,):
             raise InputError(f"inertia: expected three principal moments [I1, I2, I3], got shape {value.shape}")

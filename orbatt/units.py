@@ -30,9 +30,10 @@ RATE = u.rad / u.s
 GM = u.km**3 / u.s**2
 DIMENSIONLESS = u.dimensionless_unscaled
 
-#: CF/UDUNITS unit spellings orbatt writes, with the astropy unit each one parses to. Every
-#: key round-trips: ``astropy.units.Unit(key) == CF_UNITS[key]`` (tested), and UDUNITS-2
-#: accepts it.
+#: CF/UDUNITS unit spellings orbatt writes, with the astropy unit each one parses to. Exponents
+#: are spelled with ``^`` (``"kg km^2 s^-1"``): astropy, UDUNITS-2 (the CF unit library) and
+#: pint's default registry all parse this form, while pint reads ``"s-1"`` as "s minus 1".
+#: Every key round-trips: ``astropy.units.Unit(key) == CF_UNITS[key]`` (tested with all three).
 CF_UNITS = {
     "1": u.dimensionless_unscaled,
     "rad": u.rad,
@@ -40,18 +41,22 @@ CF_UNITS = {
     "s": u.s,
     "km": u.km,
     "m": u.m,
-    "km s-1": u.km / u.s,
-    "m s-1": u.m / u.s,
-    "rad s-1": u.rad / u.s,
-    "degree s-1": u.deg / u.s,
-    "kg km2": u.kg * u.km**2,
-    "kg m2": u.kg * u.m**2,
-    "kg km2 s-1": u.kg * u.km**2 / u.s,
-    "kg m2 s-1": u.kg * u.m**2 / u.s,
-    "kg km2 s-2": u.kg * u.km**2 / u.s**2,
+    "km s^-1": u.km / u.s,
+    "m s^-1": u.m / u.s,
+    "rad s^-1": u.rad / u.s,
+    "degree s^-1": u.deg / u.s,
+    "kg km^2": u.kg * u.km**2,
+    "kg m^2": u.kg * u.m**2,
+    "kg km^2 s^-1": u.kg * u.km**2 / u.s,
+    "kg m^2 s^-1": u.kg * u.m**2 / u.s,
+    "kg km^2 s^-2": u.kg * u.km**2 / u.s**2,
     "J": u.J,
-    "km3 s-2": u.km**3 / u.s**2,
+    "km^3 s^-2": u.km**3 / u.s**2,
 }
+
+#: spellings orbatt 0.1 wrote (UDUNITS's bare exponents, ``"kg km2 s-1"``), still read by
+#: :func:`parse_unit` so that files written before stay readable; never written.
+LEGACY_UNITS = {k.replace("^", ""): v for k, v in CF_UNITS.items() if "^" in k}
 
 #: time units of a CF ``"<unit> since <date>"`` string
 CF_TIME_UNITS = {"seconds": u.s, "second": u.s, "secs": u.s, "sec": u.s, "s": u.s,
@@ -60,9 +65,9 @@ CF_TIME_UNITS = {"seconds": u.s, "second": u.s, "secs": u.s, "sec": u.s, "s": u.
 
 #: CF spelling of the internal unit system by quantity kind (the ``units`` attribute orbatt
 #: writes for a dimensional problem)
-DIMENSIONAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s-1", "inertia": "kg km2",
-                     "momentum": "kg km2 s-1", "energy": "kg km2 s-2", "length": "km",
-                     "speed": "km s-1", "one": "1"}
+DIMENSIONAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s^-1", "inertia": "kg km^2",
+                     "momentum": "kg km^2 s^-1", "energy": "kg km^2 s^-2", "length": "km",
+                     "speed": "km s^-1", "one": "1"}
 #: the same for a dimensionless problem: ``"1"`` everywhere except angles (``"rad"``)
 DIMENSIONLESS_UNITS = {k: ("rad" if k == "angle" else "1") for k in DIMENSIONAL_UNITS}
 
@@ -116,9 +121,9 @@ def unit_string(unit) -> str:
     Returns
     -------
     str
-        The :data:`CF_UNITS` key whose unit is written the same way (``"kg km2 s-1"``), or
-        else the FITS spelling astropy gives (``"km2 kg s-3"``, also CF-compatible), or the
-        generic one. The result always parses back to an equal unit with
+        The :data:`CF_UNITS` key whose unit is written the same way (``"kg km^2 s^-1"``), or
+        else the bases with ``^`` exponents (``"km^2 kg s^-3"``, :func:`caret_string`), or the
+        FITS or generic spelling astropy gives. The result always parses back to an equal unit with
         :func:`astropy.units.Unit`.
     """
     unit = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
@@ -128,6 +133,9 @@ def unit_string(unit) -> str:
     for key, val in CF_UNITS.items():
         if val.to_string() == rep:
             return key
+    caret = caret_string(unit)
+    if caret is not None:
+        return caret
     for fmt in ("fits", "generic"):
         try:
             s = unit.to_string(fmt)
@@ -139,6 +147,30 @@ def unit_string(unit) -> str:
         except ValueError:
             continue
     return unit.to_string()
+
+
+def caret_string(unit):
+    """``"kg km^2 s^-3"``: the bases of ``unit`` with ``^`` exponents, or ``None`` when the unit
+    has a scale factor or a base whose name is not a plain word (then no such spelling)."""
+    unit = u.Unit(unit)
+    if unit.scale != 1.0 or not unit.bases:
+        return None
+    parts = []
+    for base, power in sorted(zip(unit.bases, unit.powers), key=lambda bp: bp[1] < 0):
+        name = base.to_string()
+        if not name.isalpha():
+            return None
+        if power == 1:
+            parts.append(name)
+        elif float(power).is_integer():
+            parts.append(f"{name}^{int(power)}")
+        else:
+            return None
+    s = " ".join(parts)
+    try:
+        return s if u.Unit(s) == unit else None
+    except ValueError:
+        return None
 
 
 def parse_unit(s):
@@ -160,6 +192,8 @@ def parse_unit(s):
     s = str(s).strip()
     if s in CF_UNITS:
         return CF_UNITS[s]
+    if s in LEGACY_UNITS:
+        return LEGACY_UNITS[s]
     if " since " in s:
         head = s.split(" since ", 1)[0].strip().lower()
         if head in CF_TIME_UNITS:
@@ -168,4 +202,4 @@ def parse_unit(s):
         return u.Unit(s)
     except ValueError:
         raise InputError(f"units: {s!r} is not a unit astropy parses; use a CF spelling such as "
-                         f"'rad s-1' or 'kg km2'") from None
+                         f"'rad s^-1' or 'kg km^2'") from None

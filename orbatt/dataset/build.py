@@ -25,8 +25,13 @@ from ..orbital import lvlh_angles
 from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from ..version import __version__
 
+#: why ``q``/``Q`` and ``g``/``G`` differ only in case (CF §2.3 advises against it): the names
+#: are the paper's notation, which every equation of the documentation uses
+CASE_NOTE = ("q/Q and g/G differ only in case: the notation of Arribas, Elipe & Palacios (2006), "
+             "kept so that names match the paper's equations (CF 2.3 advises distinct names)")
+
 __all__ = [
-    "to_dataset", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
+    "CASE_NOTE", "to_dataset", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
     "QUATERNION_ORDER", "QUAT_INDEX", "QUAT_LABELS", "AXIS_INDEX", "AXIS_LABELS", "EULER_313_LABELS",
     "EULER_321_LABELS", "LABEL_COORDS", "CONVENTIONS", "REFERENCE", "FRAMES",
 ]
@@ -243,11 +248,12 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     e313 = np.stack([phi, theta, psi], axis=-1)
 
     tdims = lead + ("time",)
+    # a CF time coordinate with or without an epoch (the file form adds "seconds since <epoch>",
+    # calendar and units_metadata where there is one: orbatt.dataset.netcdf.encode)
     time_attrs = {"units": U["time"], "long_name": ("time since the epoch" if epoch_s else
                                                       "dimensionless time" if dimless else
-                                                      "time since the start")}
-    if epoch_s:
-        time_attrs.update(standard_name="time", axis="T")
+                                                      "time since the start"),
+                  "standard_name": "time", "axis": "T"}
     coords = {
         "time": xr.Variable(("time",), t, time_attrs),
         "quat": cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
@@ -269,10 +275,10 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
                   **_quat_attrs("B relative to S", "x_S = q x_B q~ (maps body to space components)")),
         "Q": cf_variable(qv, Q, U["momentum"], "conjugate momentum of q (paper eq. 5: Q = 2 q g)",
                   quaternion_order=QUATERNION_ORDER, conjugate_to="q (B relative to S)",
-                  convention="g = 1/2 Im(q~ Q) (body), G = 1/2 Im(Q q~) (space)"),
+                  convention="g = 1/2 Im(q~ Q) (body), G = 1/2 Im(Q q~) (space)", comment=CASE_NOTE),
         "omega": cf_variable(vv, omega, U["rate"], "angular velocity of the body (body components)", frame="B"),
         "g": cf_variable(vv, g, U["momentum"], "angular momentum (body components)", frame="B"),
-        "G": cf_variable(vv, G, U["momentum"], "angular momentum (space components)", frame="S"),
+        "G": cf_variable(vv, G, U["momentum"], "angular momentum (space components)", frame="S", comment=CASE_NOTE),
         "energy": cf_variable(tdims, T + Upot, U["energy"], "total energy H = T + U"),
         "kinetic_energy": cf_variable(tdims, T, U["energy"], "kinetic energy T (paper eq. 6)"),
         "potential_energy": cf_variable(tdims, Upot, U["energy"], "potential energy U"),
@@ -303,7 +309,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
                       **_quat_attrs("O relative to S", "x_S = p x_O p~ (maps orbital to space components)")),
             "true_anomaly": cf_variable(("time",), nu, "rad", "true anomaly"),
             "position": cf_variable(("time", "axis"), pos, "km", "position of the body's centre of mass", frame="S"),
-            "velocity": cf_variable(("time", "axis"), vel, "km s-1", "velocity of the body's centre of mass", frame="S"),
+            "velocity": cf_variable(("time", "axis"), vel, "km s^-1", "velocity of the body's centre of mass", frame="S"),
             "q_orbital": cf_variable(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
                               **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
             "euler_321": cf_variable(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",

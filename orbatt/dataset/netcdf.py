@@ -4,9 +4,19 @@ run goes; :class:`NetCDFWriter`), :func:`open_dataset`, and the file form
 
 float64 is stored losslessly (zlib + shuffle), chunked along an unlimited ``time`` dimension.
 In the file the time coordinate of a problem with an epoch has the CF encoding
-``units = "seconds since <epoch>"``, ``calendar = "standard"`` (plain
-:func:`xarray.open_dataset` decodes it to datetimes); :func:`open_dataset` gives back the
-in-memory form (``units = "s"``) bit for bit. Two engines write the same netCDF-4/HDF5 layout:
+``units = "seconds since <epoch>"``, ``calendar = "standard"``,
+``units_metadata = "leap_seconds: utc"`` (plain :func:`xarray.open_dataset` decodes it to
+datetimes); :func:`open_dataset` gives back the in-memory form (``units = "s"``) bit for bit.
+A dimensional run without an epoch gets the nominal reference :data:`NOMINAL_REFERENCE`
+(``leap_seconds: none``); a dimensionless run keeps ``units = "1"``: its time unit is the
+problem's own (``1/n``), which CF's time units cannot express.
+
+Leap seconds: orbatt integrates in SI seconds from the epoch and turns times into dates with
+astropy, which counts leap seconds (``epoch + t`` is ``t`` SI seconds later, also across a leap
+second). That is CF 1.11's ``units_metadata = "leap_seconds: utc"`` (elapsed time with leap
+seconds, on the ``standard`` calendar). Tools that ignore leap seconds (cftime, hence xarray's
+decoding) are off by one second per leap second inserted between the epoch and a sample; the
+``time`` values themselves (elapsed seconds) are exact. Two engines write the same netCDF-4/HDF5 layout:
 netCDF4 and h5netcdf (:func:`check_engine`).
 """
 from __future__ import annotations
@@ -27,9 +37,16 @@ from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, orbatt_version, utc_now
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
-           "TEMP_PREFIX", "DEFAULT_CHUNK_TIME"]
+           "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS"]
 
 DEFAULT_CHUNK_TIME = 16384
+#: CF 1.11 §4.4 leap-second statement of the file's time coordinate (module docstring)
+LEAP_SECONDS = "leap_seconds: utc"
+#: the CF reference date of a dimensional run without an epoch: CF requires one for a time
+#: coordinate; year 1 says plainly that it is no calendar date (``comment`` says so too)
+NOMINAL_REFERENCE = "0001-01-01 00:00:00"
+NOMINAL_COMMENT = ("no epoch: time counts seconds from the start of the run; the reference date "
+                   f"{NOMINAL_REFERENCE} is nominal (CF requires one)")
 
 
 def _default_engine():
@@ -61,15 +78,19 @@ def check_engine(engine):
 
 
 def encode(ds: xr.Dataset) -> xr.Dataset:
-    """The file form: CF time reference where there is an epoch, no stale encodings."""
+    """The file form: CF time reference (the epoch, or :data:`NOMINAL_REFERENCE` for a
+    dimensional run without one), no stale encodings."""
     out = ds.drop_encoding()
+    if "time" not in ds.coords or ds["time"].attrs.get("units") != "s":
+        return out  # a dimensionless time ("1") has no CF time reference
     epoch = ds.attrs.get("epoch")
-    if epoch and "time" in ds.coords and ds["time"].attrs.get("units") == "s":
-        attrs = dict(ds["time"].attrs)
-        attrs["units"] = f"seconds since {epoch}"
-        attrs["calendar"] = "standard"
-        out = out.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs))
-    return out
+    attrs = dict(ds["time"].attrs)
+    if epoch:
+        attrs.update(units=f"seconds since {epoch}", calendar="standard", units_metadata=LEAP_SECONDS)
+    else:
+        attrs.update(units=f"seconds since {NOMINAL_REFERENCE}", calendar="proleptic_gregorian",
+                     units_metadata="leap_seconds: none", comment=NOMINAL_COMMENT)
+    return out.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs))
 
 
 def decode(ds: xr.Dataset) -> xr.Dataset:
@@ -82,10 +103,13 @@ def decode(ds: xr.Dataset) -> xr.Dataset:
                 raise InputError(f"time: units {units!r}; orbatt files use 'seconds since <epoch>'")
             attrs = dict(ds["time"].attrs)
             attrs["units"] = "s"
-            attrs.pop("calendar", None)
+            for name in ("calendar", "units_metadata"):
+                attrs.pop(name, None)
+            if attrs.get("comment") == NOMINAL_COMMENT:
+                del attrs["comment"]
             ds = ds.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs,
                                                    encoding=ds["time"].encoding))
-            if "epoch" not in ds.attrs:
+            if "epoch" not in ds.attrs and ref != NOMINAL_REFERENCE:
                 ds.attrs["epoch"] = ref
     for name in LABEL_COORDS:
         if name in ds.coords and ds[name].dtype.kind in "OS":

@@ -11,12 +11,12 @@ import numpy as np
 from astropy import constants as const
 
 from .. import units as U
-from ..core import potentials as kp
 from ..core import sampled as ks
 from ..epoch import epoch_string
 from ..errors import InputError
-from .base import GM_EARTH, OrbitProvider, as_times
+from .base import GM_EARTH
 from .kepler import KeplerOrbit
+from .sampled import SampledOrbit
 
 #: Earth's J2 (unnormalized; EGM2008 tide-free ``C20bar = -0.484165143790815e-3``,
 #: ``J2 = -sqrt(5) C20bar``).
@@ -32,7 +32,7 @@ PERTURBATIONS = ("j2", "moon", "sun")
 INTEGRATORS = ("ias15", "whfast")
 
 
-class ReboundOrbit(OrbitProvider):
+class ReboundOrbit(SampledOrbit):
     """An orbit integrated by REBOUND over ``[0, t_end]`` and interpolated in between.
 
     Parameters
@@ -101,6 +101,7 @@ class ReboundOrbit(OrbitProvider):
     """
 
     name = "rebound"
+    span_hint = "build it with a larger t_end"
 
     def __init__(self, initial, t_end, *, perturbations=(), integrator="ias15", samples_per_orbit=128,
                  epsilon=None, dt=None, j2=None, reference_radius=None):
@@ -290,50 +291,6 @@ class ReboundOrbit(OrbitProvider):
                 sim.steps(k)
                 row = record(rows)
         return np.ascontiguousarray(np.array(rows))
-
-    # ---- evaluation -------------------------------------------------------------------
-    @property
-    def samples(self):
-        """The sample table ``(N, 10)``: ``t`` (s), position (km), velocity (km/s) and
-        acceleration (km/s^2) relative to the central body in ``S`` (read-only)."""
-        return self._table
-
-    @property
-    def t_last(self):
-        """Last sampled time (s): the provider answers for ``0 <= t <= t_last``."""
-        return float(self._table[-1, 0])
-
-    @property
-    def time_span(self):
-        """``(t_first, t_last)`` (s): the sampled span, where the provider answers."""
-        return float(self._table[0, 0]), float(self._table[-1, 0])
-
-    def _interp(self, t):
-        t = as_times(t)
-        flat = np.ascontiguousarray(t.reshape(-1))
-        lo, hi = self._table[0, 0], self._table[-1, 0]
-        if flat.size and (flat.min() < lo or flat.max() > hi):
-            bad = flat[(flat < lo) | (flat > hi)][0]
-            raise InputError(f"t: {bad!r} s is outside the sampled span [{lo}, {hi}] s of this REBOUND orbit; "
-                             "build it with a larger t_end")
-        pos, vel, acc = ks.sampled_many(flat, self._table)
-        shape = t.shape + (3,)
-        return pos.reshape(shape), vel.reshape(shape), acc.reshape(shape)
-
-    def state(self, t):
-        """``(position km, velocity km/s)`` relative to the central body in ``S``,
-        interpolated; each ``t.shape + (3,)``."""
-        pos, vel, _ = self._interp(t)
-        return pos, vel
-
-    def acceleration(self, t):
-        """Acceleration relative to the central body in ``S`` (km/s^2), all forces."""
-        return self._interp(t)[2]
-
-    def kernel(self):
-        """``(GRAVITY_GRADIENT_SAMPLED, [GM, t_first, t_last], samples)``."""
-        params = np.array([self.gm, self._table[0, 0], self._table[-1, 0]])
-        return kp.GRAVITY_GRADIENT_SAMPLED, params, self._table
 
     def describe(self):
         """Plain description: the initial orbit's keys (``a_km``, ...; ``type`` is

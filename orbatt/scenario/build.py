@@ -14,12 +14,12 @@ import numpy as np
 from .. import quaternion as qt
 from .. import units as U
 from ..errors import InputError, ScenarioError
-from ..orbits import KeplerOrbit, ReboundOrbit
+from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from ..potentials import GravityGradient, HeavyTop, TorqueFree
 from ..state import State
 from ..orbital import state_from_orbital
 
-__all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_potential", "build_initial_state",
+__all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "tle_period", "build_potential", "build_initial_state",
            "build_output_times"]
 
 
@@ -48,6 +48,24 @@ def build_rebound_orbit(ctx, o, kepler, t_end):
 
     try:
         return ReboundOrbit(kepler, t_end * U.TIME, perturbations=o["perturbations"], integrator=o["integrator"])
+    except InputError as exc:
+        raise ctx.error("[orbit]", str(exc)) from None
+
+
+def tle_period(o):
+    """Orbital period (s) of the TLE of a validated ``[orbit]`` table (from its mean motion;
+    converts ``"N orbits"`` before the orbit is sampled)."""
+    from sgp4.api import Satrec
+
+    sat = Satrec.twoline2rv(o["tle"][-2], o["tle"][-1])
+    return 2.0 * math.pi / (sat.no_kozai / 60.0)
+
+
+def build_tle_orbit(ctx, o, t_end):
+    """The :class:`~orbatt.orbits.TleOrbit` of a validated ``[orbit]`` table over
+    ``[0, t_end]`` (s); an SGP4 failure along the span (a decayed orbit) names ``tle``."""
+    try:
+        return TleOrbit(o["tle"], t_end * U.TIME, epoch=o["epoch"])
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
 

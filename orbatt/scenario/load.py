@@ -8,7 +8,7 @@ from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
-                    build_rebound_orbit)
+                    build_rebound_orbit, build_tle_orbit, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
 from ..dataset import to_dataset
@@ -51,12 +51,17 @@ class Scenario:
         self.body = RigidBody(spec.inertia if spec.dimensionless else spec.inertia * U.INERTIA)
         self.orbit = None
         kepler = period = None
-        if spec.orbit is not None:
+        provider = spec.orbit["provider"] if spec.orbit is not None else None
+        if provider == "tle":
+            period = tle_period(spec.orbit)
+        elif spec.orbit is not None:
             kepler = build_kepler_orbit(ctx, spec.orbit)
             period = kepler.period
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
-        if spec.orbit is not None:
-            self.orbit = (kepler if spec.orbit["provider"] == "kepler"
+        if provider == "tle":
+            self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]))
+        elif spec.orbit is not None:
+            self.orbit = (kepler if provider == "kepler"
                           else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))
         self.potential = build_potential(spec, self.orbit)
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)

@@ -53,14 +53,16 @@ TABLES = {
     "initial": {"q", "Q", "omega", "euler_313", "euler_momenta", "frame"},
     "potential": {"kind", "sign"},
     "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
-              "mean_anomaly", "epoch", "perturbations", "integrator"},
+              "mean_anomaly", "epoch", "perturbations", "integrator", "tle", "tle_file"},
     "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
 }
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
 FRAMES = ("inertial", "orbital")
-PROVIDERS = ("kepler", "rebound")
+PROVIDERS = ("kepler", "rebound", "tle")
+#: the [orbit] keys of provider = "tle" (the elements come from the TLE)
+TLE_KEYS = {"provider", "tle", "tle_file", "epoch", "central_body"}
 
 
 def _check_keys(ctx, data):
@@ -149,7 +151,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         if dimless:
             raise ctx.error("[body] inertia", "the gravity-gradient potential needs a dimensional inertia "
                                               "(e.g. '400 kg km2') to go with the orbit's units")
-        orbit = _parse_orbit(ctx, data["orbit"])
+        orbit = _parse_orbit(ctx, data["orbit"], source)
     elif "orbit" in data:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
@@ -173,9 +175,14 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
                 integration=integ, sweep=sweep)
 
 
-def _parse_orbit(ctx, o):
+def _parse_orbit(ctx, o, source="<scenario>"):
     out = {}
     out["provider"] = parse_choice(ctx, "[orbit] provider", o.get("provider", "kepler"), PROVIDERS)
+    if out["provider"] == "tle":
+        return _parse_tle_orbit(ctx, o, source)
+    for k in ("tle", "tle_file"):
+        if k in o:
+            raise ctx.error(f"[orbit] {k}", "only used by provider = 'tle'; remove it or set provider = 'tle'")
     if "gm" in o and "central_body" in o:
         raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
     if "gm" in o:
@@ -222,6 +229,39 @@ def _parse_orbit(ctx, o):
         for k in ("perturbations", "integrator"):
             if k in o:
                 raise ctx.error(f"[orbit] {k}", "only used by provider = 'rebound'; remove it or switch provider")
+    return out
+
+
+def _parse_tle_orbit(ctx, o, source):
+    """``[orbit] provider = "tle"``: the two lines (``tle``) or a file (``tle_file``, relative
+    to the scenario file), checked here (:func:`orbatt.orbits.tle.parse_tle`); an optional
+    ``epoch`` (default: the TLE's)."""
+    from ..orbits.tle import parse_tle, read_tle_file
+
+    extra = sorted(set(o) - TLE_KEYS)
+    if extra:
+        raise ctx.error(f"[orbit] {extra[0]}", "not used by provider = 'tle' (the elements come from the TLE); "
+                                               "remove it")
+    if ("tle" in o) == ("tle_file" in o):
+        raise ctx.error("[orbit] tle", "give exactly one of tle = ['1 ...', '2 ...'] or tle_file = 'path'")
+    parse_choice(ctx, "[orbit] central_body", o.get("central_body", "earth"), ("earth",))
+    try:
+        if "tle" in o:
+            lines = list(parse_tle(o["tle"], "tle"))
+        else:
+            path = Path(str(o["tle_file"]))
+            if not path.is_absolute() and Path(source).parent.is_dir():
+                path = Path(source).parent / path
+            lines = list(read_tle_file(path, "tle_file"))
+    except InputError as exc:
+        raise ctx.error("[orbit]", str(exc)) from None
+    out = {"provider": "tle", "tle": lines, "central_body": "earth", "gm": None}
+    out["epoch"] = None
+    if "epoch" in o:
+        try:
+            out["epoch"] = parse_epoch(str(o["epoch"]))
+        except InputError:
+            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
     return out
 
 

@@ -224,6 +224,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     ScenarioError
         Naming ``[sweep] key`` or ``[sweep.parameters.NAME] key``, the value and the fix.
     """
+    if orbit is not None and orbit["provider"] == "tle":
+        raise ctx.error("[sweep]", "sweeps over a TLE orbit (provider = 'tle') are not supported; "
+                                   "use a kepler or rebound orbit for a sweep")
     for k in table:
         if k not in SWEEP_KEYS:
             raise ctx.error(f"[sweep] {k}", f"unknown key; allowed keys in [sweep]: {', '.join(sorted(SWEEP_KEYS))}")

@@ -93,7 +93,7 @@ def test_orbit_variables(orbit_ds, orbit_traj):
     t = orbit_traj.t
     assert all(v in ds for v in REQUIRED + ORBIT_VARS)
     _every_units_parses(ds)
-    assert ds["r"].attrs["units"] == "km" and ds["velocity"].attrs["units"] == "km s-1"
+    assert ds["r"].attrs["units"] == "km" and ds["velocity"].attrs["units"] == "km s^-1"
     assert ds["position"].attrs["frame"] == "S" and ds["true_anomaly"].attrs["units"] == "rad"
     assert ds["p"].attrs["frames"] == "O relative to S" and ds["q_orbital"].attrs["frames"] == "B relative to O"
     assert np.array_equal(ds["r"].values, orbit.radius(t))

@@ -41,7 +41,7 @@ def test_file_opens_with_plain_xarray_and_netcdf4(orbit_ds, free_ds, tmp_path):
         assert str(t0).startswith("2024-03-20T03:06:00")
         step = (plain["time"].values[1] - t0) / np.timedelta64(1, "ns") * 1e-9
         assert abs(step - orbit_ds["time"].values[1]) < 1e-6
-        assert plain["omega"].attrs["units"] == "rad s-1"
+        assert plain["omega"].attrs["units"] == "rad s^-1"
         assert np.array_equal(plain["q"].values, orbit_ds["q"].values)
     # the raw file: CF attributes that matter
     with netCDF4.Dataset(path) as nc:
@@ -50,6 +50,7 @@ def test_file_opens_with_plain_xarray_and_netcdf4(orbit_ds, free_ds, tmp_path):
         tv = nc.variables["time"]
         assert tv.getncattr("units") == "seconds since 2024-03-20T03:06:00.000000000Z"
         assert tv.getncattr("calendar") == "standard"
+        assert tv.getncattr("units_metadata") == "leap_seconds: utc"  # SI seconds, astropy's UTC
         assert tv.getncattr("standard_name") == "time" and tv.getncattr("axis") == "T"
         assert nc.dimensions["time"].isunlimited()
         for name, var in nc.variables.items():
