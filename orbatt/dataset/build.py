@@ -330,7 +330,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
 #: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m
 _TORQUE_TO_N_M = 1e6
 _FIELD_VARIABLES = {
-    "density": ((), "kg m-3", "atmospheric density along the orbit", {}),
+    "density": ((), "kg m^-3", "atmospheric density along the orbit", {}),
     "magnetic_field": (("axis",), "T", "geomagnetic field along the orbit (inertial components)", {"frame": "S"}),
     "sun_direction": (("axis",), "1", "unit vector from the body to the Sun (inertial components)", {"frame": "S"}),
     "shadow": ((), "1", "shadow function: 0 = umbra ... 1 = full Sun", {}),
