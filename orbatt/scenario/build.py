@@ -10,13 +10,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from astropy import units as u
 
 from .. import quaternion as qt
 from .. import units as U
 from ..errors import InputError, ScenarioError
 from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from ..potentials import GravityGradient, HeavyTop, TorqueFree
+from ..environment.atmosphere import NRLMSIS, ExponentialAtmosphere, PiecewiseExponentialAtmosphere
+from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
+from ..torques import EnvironmentTorques
 from ..orbital import state_from_orbital
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "tle_period", "build_potential", "build_initial_state",
@@ -86,8 +90,33 @@ def _duration(t, period):
     return value * period if kind == "orbits" else value
 
 
-def build_potential(spec, orbit):
-    """The potential of ``spec.potential_kind`` (a gravity gradient needs the ``orbit``)."""
+def build_environment_torques(spec, orbit, t_end):
+    """The :class:`~orbatt.torques.EnvironmentTorques` of ``spec.torques`` along ``orbit``,
+    sampled over ``[0, t_end]`` (s)."""
+    tq = spec.torques
+    env = tq["environment"]
+    atmosphere = field = None
+    if tq["drag"]:
+        if env["atmosphere"] == "nrlmsis":
+            atmosphere = NRLMSIS(env["f107"], env["f107a"], env["ap"])
+        elif "density0" in env:
+            atmosphere = ExponentialAtmosphere(env["density0"] * u.kg / u.m**3, env["altitude0"] * u.km,
+                                               env["scale_height"] * u.km)
+        else:
+            atmosphere = PiecewiseExponentialAtmosphere()
+    if tq["residual_dipole"] is not None:
+        field = IGRFField() if env["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
+    dipole = None if tq["residual_dipole"] is None else tq["residual_dipole"] * u.A * u.m**2
+    return EnvironmentTorques(orbit, t_end * u.s, facets=tq["facets"], gravity_gradient=True, drag=tq["drag"],
+                              srp=tq["srp"], residual_dipole=dipole, atmosphere=atmosphere, magnetic_field=field,
+                              shadow=env["shadow"], corotation=env["corotation"])
+
+
+def build_potential(spec, orbit, t_end=None):
+    """The potential of ``spec.potential_kind`` (a gravity gradient needs the ``orbit``; with
+    ``[torques]``, the environment torques sampled up to ``t_end``)."""
+    if spec.torques is not None:
+        return build_environment_torques(spec, orbit, t_end)
 
     if spec.potential_kind == "torque-free":
         return TorqueFree()

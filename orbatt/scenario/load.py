@@ -63,7 +63,7 @@ class Scenario:
         elif spec.orbit is not None:
             self.orbit = (kepler if provider == "kepler"
                           else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))
-        self.potential = build_potential(spec, self.orbit)
+        self.potential = build_potential(spec, self.orbit, float(self.times[-1]))
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
         self.method = spec.integration["method"]
         self.settings = {k: spec.integration[k] for k in ("rtol", "atol") if k in spec.integration}

@@ -43,19 +43,22 @@ from ..errors import InputError
 from ..epoch import parse_epoch
 from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
+from .torques_schema import parse_torques
 from ..methods import METHODS
 
 __all__ = ["Spec", "parse", "TOP_KEYS", "TABLES", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
 
 TOP_KEYS = {"name", "description"}
 TABLES = {
-    "body": {"inertia", "mass_g", "center_of_mass"},
+    "body": {"inertia", "mass_g", "center_of_mass", "facets"},
     "initial": {"q", "Q", "omega", "euler_313", "euler_momenta", "frame"},
     "potential": {"kind", "sign"},
     "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
               "mean_anomaly", "epoch", "perturbations", "integrator", "tle", "tle_file"},
     "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
+    "torques": None,  # keys checked by parse_torques (torques_schema.py)
+    "environment": None,
 }
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
@@ -100,6 +103,7 @@ class Spec:
     orbit: dict | None = None
     integration: dict = field(default_factory=dict)
     sweep: SweepSpec | None = None  # the [sweep] table, if any
+    torques: dict | None = None  # [torques], [environment] and the facets (torques_schema.py)
 
 
 def parse(text: str, source: str = "<scenario>") -> Spec:
@@ -155,6 +159,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     elif "orbit" in data:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
+    torques = parse_torques(ctx, data, kind, orbit)
     init = data["initial"]
     frame = parse_choice(ctx, "[initial] frame", init.get("frame", "inertial"), FRAMES)
     if frame == "orbital" and orbit is None:
@@ -163,6 +168,8 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
 
     integ = _parse_integration(ctx, data["integration"], dimless, orbit)
     sweep = None
+    if "sweep" in data and torques is not None:
+        raise ctx.error("[sweep]", "sweeps of scenarios with [torques] are not supported yet; run the cases one by one")
     if "sweep" in data:
         sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
                                   frame=frame)
@@ -172,7 +179,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         raise ctx.error("name/description", "must be strings")
     return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
                 potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
-                integration=integ, sweep=sweep)
+                integration=integ, sweep=sweep, torques=torques)
 
 
 def _parse_orbit(ctx, o, source="<scenario>"):
