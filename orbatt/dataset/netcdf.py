@@ -403,6 +403,35 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     engine = check_engine(engine)
     kwargs.setdefault("decode_times", False)
     kwargs.setdefault("decode_timedelta", False)
-    ds = xr.open_dataset(os.fspath(path), engine=engine, **kwargs)
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as f:
+            head = f.read(8)
+    except OSError as exc:
+        raise InputError(f"{name}: cannot read it ({exc.strerror or exc})") from None
+    if head != b"\x89HDF\r\n\x1a\n":  # orbatt writes netCDF-4 (HDF5) only
+        what = "a netCDF-3 file" if head.startswith(b"CDF") else "not a NetCDF file"
+        raise InputError(f"{name}: {what}, not written by orbatt; give a result of 'orbatt run' or 'orbatt sweep'")
+    try:
+        ds = xr.open_dataset(name, engine=engine, **kwargs)
+    except Exception as exc:  # noqa: BLE001 - the libraries raise OSError, ValueError, KeyError, ...
+        raise InputError(f"{name}: cannot be read as NetCDF ({type(exc).__name__}: {_short(exc)}); the file is "
+                         "damaged or truncated") from None
+    if "orbatt_version" not in ds.attrs:
+        ds.close()
+        raise InputError(f"{name}: a NetCDF file not written by orbatt (no orbatt_version attribute); give a "
+                         "result of 'orbatt run' or 'orbatt sweep'")
     ds = decode(ds)
-    return ds.load() if load else ds
+    if load:
+        try:
+            ds = ds.load()
+        except Exception as exc:  # noqa: BLE001
+            ds.close()
+            raise InputError(f"{name}: damaged: reading its values failed ({type(exc).__name__}: "
+                             f"{_short(exc)})") from None
+    return ds
+
+
+def _short(exc, n=120):
+    text = " ".join(str(exc).split())
+    return text if len(text) <= n else text[:n] + "..."
