@@ -98,8 +98,9 @@ def decode(ds: xr.Dataset) -> xr.Dataset:
 
 def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
     """Per-variable NetCDF encoding: no fill values, labels as char arrays, chunks of
-    ``chunk_time`` samples along ``time`` (one ``case`` per chunk), zlib + shuffle on floats
-    when ``complevel > 0`` (lossless)."""
+    ``chunk_time`` samples along ``time`` (one ``case`` per chunk) with a Fletcher-32
+    checksum each (reading a damaged chunk fails), zlib + shuffle on floats when
+    ``complevel > 0`` (lossless)."""
     enc = {}
     for name, var in ds.variables.items():
         e = {}
@@ -110,6 +111,7 @@ def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
         if "time" in var.dims:
             e["chunksizes"] = tuple(chunk_time if d == "time" else (1 if d == "case" else n)
                                     for d, n in zip(var.dims, var.shape))
+            e["fletcher32"] = True  # a checksum per chunk: damage is detected on reading
             if var.dtype.kind == "f" and complevel > 0:
                 e.update(zlib=True, complevel=int(complevel), shuffle=True)
         enc[name] = e

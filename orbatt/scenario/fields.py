@@ -46,7 +46,7 @@ def _split_quantity(ctx, where, text, unit):
     """``(number, astropy unit)`` of ``"NUMBER UNIT"``; the whole string must parse."""
     m = _QUANTITY.fullmatch(text)
     example = f"'1 {unit.to_string()}'" if unit != U.DIMENSIONLESS else "'0.5'"
-    if m is None or m.group(2)[:1].isdigit() or m.group(2)[:1] in "+-.":
+    if m is None or (m.group(2) and m.group(2)[0] in "0123456789+-."):
         raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example}")
     number, unit_text = float(m.group(1)), m.group(2)
     if not unit_text:
