@@ -24,8 +24,8 @@ __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_potential", "buil
            "build_output_times", "check_work", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
-#: time (1e7 outputs: 3.6 GB, and the run needs working copies of it)
-MAX_OUTPUTS = 10_000_000
+#: time (2e7 outputs: 7.2 GB, and the run needs working copies of it)
+MAX_OUTPUTS = 20_000_000
 #: most integration steps a scenario may need by the lower estimate of :func:`check_work`
 #: (the default ``max_steps`` of :func:`orbatt.propagate`: a run needing more would stop
 #: there after many minutes)
