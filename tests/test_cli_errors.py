@@ -3,7 +3,6 @@ failed run, at most two lines on stderr and no traceback unless --debug; Ctrl-C 
 (a real SIGINT to the process group, as a terminal sends it) prints orbatt's message only."""
 from __future__ import annotations
 
-import gzip
 import os
 import signal
 import subprocess
@@ -17,6 +16,7 @@ import h5py
 import numpy as np
 import pytest
 import xarray as xr
+from not_utf8_files import not_utf8_files
 
 SCEN = Path(__file__).resolve().parent.parent / "scenarios"
 FREE = (SCEN / "paper-torque-free.toml").read_text()
@@ -48,11 +48,7 @@ def result(tmp_path_factory):
 
 
 SCENARIO_BYTES = {
-    "binary": bytes(range(256)),
-    "png": b"\x89PNG\r\n\x1a\n" + bytes(64),
-    "gzip": gzip.compress(FREE.encode()),
-    "utf-16": FREE.encode("utf-16"),
-    "latin-1 byte": FREE.replace("torque-free body", "torque-free b\xf6dy").encode("latin-1"),
+    **not_utf8_files(FREE),
     "nested 50000 deep": FREE.replace("inertia = [1.25, 1.0, 0.75]",
                                       "inertia = " + "[" * 50_000 + "]" * 50_000).encode(),
     "method list": FREE.replace('method = "dop853"', "method = []").encode(),

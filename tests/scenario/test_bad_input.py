@@ -3,12 +3,12 @@ that names the key, before anything is integrated; files that are not UTF-8 TOML
 by name in load_scenario and read_aem."""
 from __future__ import annotations
 
-import gzip
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from not_utf8_files import not_utf8_files
 
 import orbatt
 from orbatt.errors import InputError, ScenarioError
@@ -140,15 +140,7 @@ def test_a_spin_at_the_work_limit_is_not_refused(tmp_path):
     assert np.isclose(np.linalg.norm(sc.state0.omega), 1000.0)
 
 
-BINARY = {
-    "binary": bytes(range(256)),
-    "png": b"\x89PNG\r\n\x1a\n" + bytes(64),
-    "gzip": gzip.compress(FREE.encode()),
-    "utf-16": FREE.encode("utf-16"),
-    "latin-1 byte": FREE.replace("torque-free body", "torque-free b\xf6dy").encode("latin-1"),
-    "hdf5": b"\x89HDF\r\n\x1a\n" + bytes(64),
-    "netcdf3": b"CDF\x01" + bytes(64),
-}
+BINARY = {**not_utf8_files(FREE), "hdf5": b"\x89HDF\r\n\x1a\n" + bytes(64), "netcdf3": b"CDF\x01" + bytes(64)}
 
 
 @pytest.mark.parametrize("kind", sorted(BINARY))
