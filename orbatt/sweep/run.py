@@ -343,7 +343,12 @@ def sweep_global_attrs(ds, sweep, stats, run):
 def _workers_ignore_sigint():
     """Start worker processes with SIGINT ignored (inherited through exec): Ctrl-C in a
     terminal signals the whole process group, and each worker would print its own
-    KeyboardInterrupt traceback; this process alone handles it and closes the cluster."""
+    KeyboardInterrupt traceback; this process alone handles it and closes the cluster.
+    The cost: a Ctrl-C in the seconds the cluster takes to start is ignored (press it
+    again). (Blocking SIGINT instead does not reach the workers: they are spawned with it
+    unblocked.) The workers log only CRITICAL messages (``silence_logs``): a failed task
+    reaches this process as an exception, and a worker whose scheduler closed on Ctrl-C
+    would log tracebacks."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -377,7 +382,7 @@ def open_client(scheduler, workers):
         n = workers or os.cpu_count() or 1
         with _workers_ignore_sigint():
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+                                   dashboard_address=None, silence_logs=logging.CRITICAL)
         return Client(cluster), cluster
     try:
         client = Client(scheduler)  # waits up to dask's distributed.comm.timeouts.connect
