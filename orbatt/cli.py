@@ -277,24 +277,46 @@ def sweep_summary(ds, title="", run=None) -> str:
     return "\n".join(lines)
 
 
+#: the variables ``info`` and ``plot`` read from a run result
+RUN_VARIABLES = ("q", "Q", "energy", "q_norm_error", "qQ")
+
+
 def _cmd_info(args):
     from .dataset import open_dataset
 
-    ds = open_dataset(_existing(args.file))
+    ds = open_dataset(_existing(args.file), load=True)  # every value read: a damaged chunk fails here
     if "sweep_format" in ds.attrs and "energy" not in ds:  # a sweep of reductions (orbatt sweep)
+        _check_variables(ds, args.file, ("integration_failed",), "a sweep result")
         print(sweep_summary(ds, title=str(args.file)))
         return 0
+    _check_variables(ds, args.file, RUN_VARIABLES, "a run result")
     print(summary(ds, title=str(args.file)))
     return 0
 
 
 def _cmd_plot(args):
     from .dataset import open_dataset
+    from .errors import InputError
 
     ds = open_dataset(_existing(args.file), load=True)
+    if "sweep_format" in ds.attrs:
+        raise InputError(f"file: {args.file!r} is a sweep result; orbatt plot draws one run (select a case in "
+                         "Python: ds.isel(case=k))")
+    _check_variables(ds, args.file, RUN_VARIABLES, "a run result")
     for f in write_plots(ds, args.output, stem=Path(args.file).stem):
         print(f)
     return 0
+
+
+def _check_variables(ds, path, names, what):
+    """Refuse an orbatt file that lacks a variable (a damaged or edited file) or has no times."""
+    from .errors import InputError
+
+    missing = [n for n in names if n not in ds.variables]
+    if missing or ("time" in ds.dims and ds.sizes["time"] == 0):
+        detail = f"no variable {missing[0]!r}" if missing else "no output times"
+        raise InputError(f"file: {str(path)!r} is not {what} orbatt can read ({detail}); give the output of "
+                         "'orbatt run' or 'orbatt sweep'")
 
 
 def _cmd_scenarios(args):
@@ -395,6 +417,12 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("orbatt: interrupted", file=sys.stderr)
         return 130
+    except (Exception, RecursionError) as exc:  # noqa: BLE001 - a bug or a resource failure: still one line
+        if args.debug:
+            raise
+        print(f"orbatt: error: {type(exc).__name__}: {' '.join(str(exc).split())[:300]} (an unexpected failure; "
+              "rerun with --debug for the traceback and report it)", file=sys.stderr)
+        return EXIT_FAILURE
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -121,7 +121,7 @@ def shadow_cylindrical(r_sat, r_sun, R_body, R_sun):
 
 
 # ---- sampled tables ------------------------------------------------------------------------
-@jit
+@jit_inline
 def find_row(table, t, work, slot):
     """Index ``i`` with ``table[i, 0] <= t <= table[i + 1, 0]`` (the first column holds
     increasing times), warm-started from ``work[slot]`` and stored there. Raises

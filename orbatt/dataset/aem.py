@@ -345,8 +345,14 @@ def read_aem(source):
     if isinstance(source, str) and source.lstrip().startswith("CCSDS_AEM_VERS"):
         text = source
     else:
-        with open(os.fspath(source), encoding="utf-8") as fh:
-            text = fh.read()
+        try:
+            with open(os.fspath(source), encoding="utf-8") as fh:
+                text = fh.read()
+        except UnicodeDecodeError as exc:
+            raise InputError(f"{os.fspath(source)}: not an AEM: byte {exc.object[exc.start]:#04x} at offset "
+                             f"{exc.start} is not UTF-8 text (KVN AEM files are ASCII)") from None
+        except OSError as exc:
+            raise InputError(f"{os.fspath(source)}: cannot read it ({exc.strerror or exc})") from None
     header, hcomments, segments = {}, [], []
     state = "header"
     meta, mcomments, stamps, rows = None, None, None, None

@@ -120,8 +120,9 @@ def decode(ds: xr.Dataset) -> xr.Dataset:
 
 def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
     """Per-variable NetCDF encoding: no fill values, labels as char arrays, chunks of
-    ``chunk_time`` samples along ``time`` (one ``case`` per chunk), zlib + shuffle on floats
-    when ``complevel > 0`` (lossless)."""
+    ``chunk_time`` samples along ``time`` (one ``case`` per chunk) with a Fletcher-32
+    checksum each (reading a damaged chunk fails), zlib + shuffle on floats when
+    ``complevel > 0`` (lossless)."""
     enc = {}
     for name, var in ds.variables.items():
         e = {}
@@ -132,6 +133,7 @@ def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
         if "time" in var.dims:
             e["chunksizes"] = tuple(chunk_time if d == "time" else (1 if d == "case" else n)
                                     for d, n in zip(var.dims, var.shape))
+            e["fletcher32"] = True  # a checksum per chunk: damage is detected on reading
             if var.dtype.kind == "f" and complevel > 0:
                 e.update(zlib=True, complevel=int(complevel), shuffle=True)
         enc[name] = e
@@ -403,6 +405,35 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     engine = check_engine(engine)
     kwargs.setdefault("decode_times", False)
     kwargs.setdefault("decode_timedelta", False)
-    ds = xr.open_dataset(os.fspath(path), engine=engine, **kwargs)
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as f:
+            head = f.read(8)
+    except OSError as exc:
+        raise InputError(f"{name}: cannot read it ({exc.strerror or exc})") from None
+    if head != b"\x89HDF\r\n\x1a\n":  # orbatt writes netCDF-4 (HDF5) only
+        what = "a netCDF-3 file" if head.startswith(b"CDF") else "not a NetCDF file"
+        raise InputError(f"{name}: {what}, not written by orbatt; give a result of 'orbatt run' or 'orbatt sweep'")
+    try:
+        ds = xr.open_dataset(name, engine=engine, **kwargs)
+    except Exception as exc:  # noqa: BLE001 - the libraries raise OSError, ValueError, KeyError, ...
+        raise InputError(f"{name}: cannot be read as NetCDF ({type(exc).__name__}: {_short(exc)}); the file is "
+                         "damaged or truncated") from None
+    if "orbatt_version" not in ds.attrs:
+        ds.close()
+        raise InputError(f"{name}: a NetCDF file not written by orbatt (no orbatt_version attribute); give a "
+                         "result of 'orbatt run' or 'orbatt sweep'")
     ds = decode(ds)
-    return ds.load() if load else ds
+    if load:
+        try:
+            ds = ds.load()
+        except Exception as exc:  # noqa: BLE001
+            ds.close()
+            raise InputError(f"{name}: damaged: reading its values failed ({type(exc).__name__}: "
+                             f"{_short(exc)})") from None
+    return ds
+
+
+def _short(exc, n=120):
+    text = " ".join(str(exc).split())
+    return text if len(text) <= n else text[:n] + "..."

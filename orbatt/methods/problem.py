@@ -19,12 +19,17 @@ from ..errors import InputError
 from ..state import State
 
 __all__ = ["Problem", "KernelSpec", "kernel_spec", "bodies_of", "initial_states", "time_span", "method_settings",
-           "output_times", "DEFAULT_MAX_STEPS", "MIN_RTOL"]
+           "output_times", "DEFAULT_MAX_STEPS", "MIN_RTOL", "MAX_RTOL", "MAX_ATOL"]
 
 #: default limit on step attempts (per ensemble member)
 DEFAULT_MAX_STEPS = 100_000_000
 #: smallest rtol accepted (10 machine epsilons, as in Hairer's dop853)
 MIN_RTOL = 10.0 * np.finfo(np.float64).eps
+#: largest rtol accepted: a relative error above 10% per step gives no accuracy at all
+MAX_RTOL = 0.1
+#: largest atol accepted: the quaternion has |q| = 1, so an absolute error above 1 leaves the
+#: attitude uncontrolled (the momentum is controlled by rtol; give atol in its unit below 1)
+MAX_ATOL = 1.0
 
 
 class KernelSpec(NamedTuple):
@@ -232,6 +237,12 @@ def method_settings(cls, rtol, atol, step, max_steps, body):
     atol = _positive(atol, "atol", allow_zero=True)
     if cls.adaptive and rtol < MIN_RTOL:
         raise InputError(f"rtol: {rtol!r} is below {MIN_RTOL:.3g} (10 machine epsilons); float64 cannot deliver it")
+    if rtol > MAX_RTOL:
+        raise InputError(f"rtol: {rtol!r} is above {MAX_RTOL:g}: a relative error above 10% per step gives no "
+                         "accuracy at all; give e.g. rtol=1e-10")
+    if atol > MAX_ATOL:
+        raise InputError(f"atol: {atol!r} is above {MAX_ATOL:g}: |q| = 1, so an absolute error above 1 leaves the "
+                         "attitude uncontrolled; give e.g. atol=1e-12")
     stepv = None
     if step is not None:
         stepv = _positive(step, "step", body, unit=body.time_unit)

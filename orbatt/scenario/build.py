@@ -15,6 +15,7 @@ from astropy import units as u
 from .. import quaternion as qt
 from .. import units as U
 from ..errors import InputError, ScenarioError
+from ..methods.problem import DEFAULT_MAX_STEPS
 from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from ..potentials import GravityGradient, HeavyTop, TorqueFree
 from ..environment.atmosphere import NRLMSIS, ExponentialAtmosphere, PiecewiseExponentialAtmosphere
@@ -23,8 +24,20 @@ from ..state import State
 from ..torques import EnvironmentTorques
 from ..orbital import state_from_orbital
 
-__all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "tle_period", "build_potential", "build_initial_state",
-           "build_output_times"]
+__all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "tle_period", "build_potential",
+           "build_environment_torques", "build_initial_state",
+           "build_output_times", "check_work", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
+
+#: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
+#: time (2e7 outputs: 7.2 GB, and the run needs working copies of it)
+MAX_OUTPUTS = 20_000_000
+#: most integration steps a scenario may need by the lower estimate of :func:`check_work`
+#: (the default ``max_steps`` of :func:`orbatt.propagate`: a run needing more would stop
+#: there after many minutes)
+MAX_WORK_STEPS = DEFAULT_MAX_STEPS
+#: most angle (rad) one step of any method covers, for :func:`check_work`'s lower estimate
+#: (DOP853 at rtol 1e-3 takes about 1 rad per step of a rotation; at 1e-12, 0.1 rad)
+MAX_ANGLE_PER_STEP = math.pi
 
 
 def build_kepler_orbit(ctx, o):
@@ -81,7 +94,12 @@ def build_output_times(ctx, integration, period):
     step_out = _duration(integration["output_step"], period)
     if step_out > t_end:
         raise ctx.error("[integration] output_step", f"{step_out:g} is longer than t_end = {t_end:g}")
-    n = int(math.floor(t_end / step_out * (1 + 1e-12)))
+    count = t_end / step_out
+    if count + 1 > MAX_OUTPUTS:
+        raise ctx.error("[integration] output_step", f"{step_out:g} over t_end = {t_end:g} gives {count:.3g} output "
+                                                     f"times, more than {MAX_OUTPUTS:.0e} (about "
+                                                     f"{count * 360 / 1e9:.3g} GB); give a longer output_step")
+    n = int(math.floor(count * (1 + 1e-12)))
     return np.arange(n + 1, dtype=np.float64) * step_out, t_end
 
 
@@ -153,3 +171,24 @@ def build_initial_state(ctx, spec, body, orbit):
         raise
     except InputError as exc:
         raise ctx.error("[initial]", str(exc)) from None
+
+
+def check_work(ctx, t_end, period, state0=None):
+    """Refuse a run that cannot end in reasonable time, before it starts.
+
+    A lower estimate of the steps any method needs: the body turns by ``|omega0| t_end``
+    (``omega0`` the initial body rate of ``state0``, if given) and the gravity-gradient potential, which depends on
+    twice the orbital angle, by ``2 (2 pi) t_end / period``; no method covers more than
+    :data:`MAX_ANGLE_PER_STEP` per step. Above :data:`MAX_WORK_STEPS` the error names the key
+    that dominates (``[initial]`` rates or ``[orbit] a``) and ``t_end``.
+    """
+    spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
+    orbit = 4 * math.pi * t_end / period if period else 0.0
+    steps = (spin + orbit) / MAX_ANGLE_PER_STEP
+    if not steps <= MAX_WORK_STEPS:  # NaN included
+        where = "[initial]" if spin >= orbit else "[orbit] a"
+        what = (f"the body turns {spin:.3g} rad" if spin >= orbit
+                else f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times")
+        fix = "lower the rates (omega, Q)" if spin >= orbit else "raise a"
+        raise ctx.error(where, f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps, more than "
+                               f"{MAX_WORK_STEPS:.0e} (hours of computing); {fix} or shorten [integration] t_end")

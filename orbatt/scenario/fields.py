@@ -9,6 +9,7 @@ scenario is dimensionless (:mod:`orbatt.units`).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,9 +33,67 @@ class FieldContext:
         return ScenarioError(f"{self.source}: {where}: {msg}")
 
 
-def parse_quantity(ctx, where, value, unit, *, dimensionless):
-    """Parse one scalar: a Quantity string, or a plain number when ``dimensionless`` (or when
-    ``unit`` is dimensionless).
+#: ``NUMBER UNIT``: one decimal number (optionally signed, with an exponent; ``nan``/``inf``
+#: parse so that they can be refused by name), then the unit; the unit must not start with
+#: another number (``"1 2 km"`` is refused, not read as ``1 (2 km)``)
+_QUANTITY = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?nan|[+-]?inf)\s*(.*?)\s*", re.IGNORECASE)
+#: nonzero magnitudes orbatt's equations take in internal units (products of a few of them
+#: stay finite in float64); per-key physical ranges are narrower (:data:`orbatt.scenario.schema.RANGES`)
+MAGNITUDE = (1e-100, 1e100)
+
+
+def _split_quantity(ctx, where, text, unit):
+    """``(number, astropy unit)`` of ``"NUMBER UNIT"``; the whole string must parse."""
+    m = _QUANTITY.fullmatch(text)
+    example = f"'1 {unit.to_string()}'" if unit != U.DIMENSIONLESS else "'0.5'"
+    if m is None or (m.group(2) and m.group(2)[0] in "0123456789+-."):
+        raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example}")
+    number, unit_text = float(m.group(1)), m.group(2)
+    if not unit_text:
+        return number, U.DIMENSIONLESS
+    try:
+        parsed = u.Unit(unit_text)
+    except ValueError:
+        raise ctx.error(where, f"{unit_text!r} in {text!r} is not a unit; write e.g. {example}") from None
+    if parsed.scale != 1 and not parsed.is_equivalent(U.DIMENSIONLESS):
+        raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example}")
+    return number, parsed
+
+
+def _check_value(ctx, where, value, x, unit, bounds):
+    """Finite, a magnitude float64 arithmetic handles, and inside ``bounds`` (``(low, high)``
+    in ``unit``, either may be None; inclusive)."""
+    if not math.isfinite(x):
+        raise ctx.error(where, f"{value!r} is not finite; give a finite value")
+    if x != 0 and not MAGNITUDE[0] <= abs(x) <= MAGNITUDE[1]:
+        raise ctx.error(where, f"{value!r} is {abs(x):.3g} {_unit_name(unit)} in magnitude, outside "
+                               f"[{MAGNITUDE[0]:g}, {MAGNITUDE[1]:g}]; give a physical value")
+    if bounds is not None:
+        lo, hi = bounds
+        if lo is not None and lo > 0 and x <= 0:
+            raise ctx.error(where, f"{value!r} must be positive")
+        if (lo is not None and x < lo) or (hi is not None and x > hi):
+            rng = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None
+                   else f">= {lo:g}" if lo is not None else f"<= {hi:g}")
+            raise ctx.error(where, f"{value!r} is {x:.6g} {_unit_name(unit)}, outside the range {rng} "
+                                   f"{_unit_name(unit)} orbatt accepts for this key")
+    return x
+
+
+def _unit_name(unit):
+    return "" if unit == U.DIMENSIONLESS else U.unit_string(unit)
+
+
+def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
+    """Parse one scalar: a Quantity string ``"NUMBER UNIT"``, or a plain number when
+    ``dimensionless`` (or when ``unit`` is dimensionless).
+
+    The rules: the whole string must parse (one number, then one unit: ``"1 2 km"`` and
+    ``"0.01 planet orbits"`` are refused); the unit must have the dimension of ``unit``
+    (``"98.2 deg deg"`` is a solid angle, not an angle); **angles always need an angle unit**
+    (``"45"`` and ``45`` are refused; only a plain ``0`` is accepted), in dimensionless
+    scenarios too; the value must be finite, of magnitude in :data:`MAGNITUDE` (or zero),
+    and inside ``bounds``.
 
     Parameters
     ----------
@@ -44,10 +103,12 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless):
     value : str, int or float
         The TOML value.
     unit : astropy Unit
-        The internal unit the value is returned in (:mod:`orbatt.units`); angles accept
-        plain numbers (rad) always.
+        The internal unit the value is returned in (:mod:`orbatt.units`).
     dimensionless : bool
-        Whether the scenario is written in plain numbers (then a unit is refused).
+        Whether the scenario is written in plain numbers (then a unit is refused, except on
+        angles).
+    bounds : (float or None, float or None), optional
+        Inclusive range in ``unit`` (the key's physical range).
 
     Returns
     -------
@@ -56,33 +117,40 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless):
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise ctx.error(where, f"{value!r} is not a number or a quantity string")
+    angle = unit == U.ANGLE
     if isinstance(value, str):
-        try:
-            q = u.Quantity(value)
-        except (TypeError, ValueError):
-            raise ctx.error(where, f"cannot parse {value!r} as a quantity; write e.g. '1 {unit.to_string()}'") from None
-        if dimensionless and unit not in (U.DIMENSIONLESS, U.ANGLE) and q.unit != U.DIMENSIONLESS:
+        number, qunit = _split_quantity(ctx, where, value, unit)
+        if angle and qunit.physical_type != "angle":
+            what = "no unit" if qunit == U.DIMENSIONLESS else f"the unit {qunit.to_string()!r} ({qunit.physical_type})"
+            raise ctx.error(where, f"{value!r} has {what}; an angle needs an angle unit, e.g. '{number:g} deg' "
+                                   f"or '{number:g} rad'")
+        if dimensionless and not angle and unit != U.DIMENSIONLESS and qunit != U.DIMENSIONLESS:
             raise ctx.error(where, f"{value!r} has a unit but the scenario is dimensionless (plain-number "
-                                  "inertia); give a plain number or give the inertia with units")
+                                   "inertia); give a plain number or give the inertia with units")
+        if not math.isfinite(number):
+            raise ctx.error(where, f"{value!r} is not finite; give a finite value")
         try:
-            eq = u.dimensionless_angles() if unit == U.ANGLE else []
-            return float(q.to_value(unit, equivalencies=eq))
+            x = float((number * qunit).to_value(unit))
         except u.UnitConversionError:
             raise ctx.error(where, f"{value!r} has the wrong dimension; expected a {unit.physical_type} such "
-                                  f"as '1 {unit.to_string()}'") from None
+                                   f"as '1 {unit.to_string()}'") from None
+        return _check_value(ctx, where, value, x, unit, bounds)
     x = float(value)
-    if not math.isfinite(x):
-        raise ctx.error(where, f"{value!r} is not finite")
-    if unit in (U.DIMENSIONLESS, U.ANGLE) or dimensionless:
-        return x
-    raise ctx.error(where, f"{value!r} has no unit; write it as a quantity string such as '{value} {unit.to_string()}'")
+    if angle and x != 0:
+        raise ctx.error(where, f"{value!r} has no unit; an angle needs an angle unit: write '{value} deg' or "
+                               f"'{value} rad'")
+    if not (angle or unit == U.DIMENSIONLESS or dimensionless):
+        raise ctx.error(where, f"{value!r} has no unit; write it as a quantity string such as "
+                               f"'{value} {unit.to_string()}'")
+    return _check_value(ctx, where, value, x, unit, bounds)
 
 
-def parse_vector(ctx, where, value, n, unit, *, dimensionless):
-    """A list of ``n`` scalars (:func:`parse_quantity` each) as an ``(n,)`` float array in ``unit``."""
+def parse_vector(ctx, where, value, n, unit, *, dimensionless, bounds=None):
+    """A list of ``n`` scalars (:func:`parse_quantity` each, with ``bounds``) as an ``(n,)``
+    float array in ``unit``."""
     if not isinstance(value, list) or len(value) != n:
         raise ctx.error(where, f"expected a list of {n} values, got {value!r}")
-    return np.array([parse_quantity(ctx, f"{where}[{k}]", v, unit, dimensionless=dimensionless)
+    return np.array([parse_quantity(ctx, f"{where}[{k}]", v, unit, dimensionless=dimensionless, bounds=bounds)
                      for k, v in enumerate(value)])
 
 
@@ -94,6 +162,10 @@ def parse_plain_vector(ctx, where, value, n):
     a = np.array(value, dtype=float)
     if not np.all(np.isfinite(a)):
         raise ctx.error(where, f"{value!r} contains non-finite numbers")
+    big = np.abs(a) > MAGNITUDE[1]
+    if np.any(big):
+        raise ctx.error(where, f"{value!r}: {a[big][0]:.3g} is beyond {MAGNITUDE[1]:g} in magnitude; give physical "
+                               "values")
     return a
 
 
@@ -112,16 +184,22 @@ def parse_int(ctx, where, value, lo, hi=None):
     return int(value)
 
 
-def parse_time(ctx, where, value, dimensionless, orbit):
-    """A duration: ``("orbits", N)`` for ``"N orbits"`` (needs an ``orbit``), else
-    ``("time", t)`` with ``t`` in s (or a plain number when ``dimensionless``)."""
-    if isinstance(value, str) and value.strip().endswith(("orbits", "orbit")):
-        num = value.strip().split()[0]
-        try:
-            n = float(num)
-        except ValueError:
-            raise ctx.error(where, f"{value!r}: write 'N orbits' with a number N") from None
+def parse_time(ctx, where, value, dimensionless, orbit, *, bounds=None):
+    """A duration: ``("orbits", N)`` for ``"N orbits"`` (needs an ``orbit``; the whole
+    string must be one number and ``orbit``/``orbits``), else ``("time", t)`` with ``t`` in
+    s (or a plain number when ``dimensionless``; :func:`parse_quantity` with ``bounds``, in
+    s). Either must be positive."""
+    if isinstance(value, str) and value.strip().lower().endswith(("orbits", "orbit")):
+        m = _QUANTITY.fullmatch(value)
+        if m is None or m.group(2).lower() not in ("orbit", "orbits"):
+            raise ctx.error(where, f"{value!r}: write 'N orbits' with one number N (e.g. '2 orbits')")
         if orbit is None:
             raise ctx.error(where, f"{value!r} needs an [orbit]; give a time such as '100 s'")
+        n = _check_value(ctx, where, value, float(m.group(1)), U.DIMENSIONLESS, None)
+        if n <= 0:
+            raise ctx.error(where, f"{value!r} must be positive")
         return ("orbits", n)
-    return ("time", parse_quantity(ctx, where, value, U.TIME, dimensionless=dimensionless))
+    t = parse_quantity(ctx, where, value, U.TIME, dimensionless=dimensionless, bounds=bounds)
+    if t <= 0:
+        raise ctx.error(where, f"{value!r} must be positive")
+    return ("time", t)

@@ -8,13 +8,13 @@ from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
-                    build_rebound_orbit, build_tle_orbit, tle_period)
+                    build_rebound_orbit, build_tle_orbit, check_work, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
 from ..dataset import to_dataset
 from ..propagation import propagate
 
-__all__ = ["Scenario", "load_scenario", "shipped_scenarios"]
+__all__ = ["Scenario", "load_scenario", "shipped_scenarios", "read_scenario_text"]
 
 
 class Scenario:
@@ -58,6 +58,7 @@ class Scenario:
             kepler = build_kepler_orbit(ctx, spec.orbit)
             period = kepler.period
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
+        check_work(ctx, self.t_end, period)  # the orbit alone, before REBOUND samples it
         if provider == "tle":
             self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]))
         elif spec.orbit is not None:
@@ -65,6 +66,7 @@ class Scenario:
                           else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))
         self.potential = build_potential(spec, self.orbit, float(self.times[-1]))
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
+        check_work(ctx, self.t_end, period, self.state0)
         self.method = spec.integration["method"]
         self.settings = {k: spec.integration[k] for k in ("rtol", "atol") if k in spec.integration}
         if "step" in spec.integration:
@@ -125,7 +127,7 @@ def shipped_scenarios():
     out = []
     for f in sorted(folder.iterdir(), key=lambda p: p.name):
         if f.name.endswith(".toml"):
-            spec = parse(f.read_text(), f.name)
+            spec = parse(read_scenario_text(f), f.name)
             out.append((spec.name, spec.description, f))
     return out
 
@@ -149,7 +151,31 @@ def load_scenario(path) -> Scenario:
         shipped = {name: f for name, _, f in shipped_scenarios()}
         key = p.name[:-5] if p.name.endswith(".toml") else p.name
         if key in shipped:
-            return Scenario(parse(shipped[key].read_text(), key), path=key)
+            return Scenario(parse(read_scenario_text(shipped[key]), key), path=key)
         raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
                             f"{', '.join(sorted(shipped))}")
-    return Scenario(parse(p.read_text(), str(p)), path=p)
+    return Scenario(parse(read_scenario_text(p), str(p)), path=p)
+
+
+#: leading bytes of binary formats a user may pass for a scenario by mistake
+_MAGIC = {b"\x89HDF\r\n\x1a\n": "an HDF5/netCDF-4 file (an orbatt result?)", b"CDF\x01": "a netCDF-3 file",
+          b"CDF\x02": "a netCDF-3 file", b"\x89PNG": "a PNG image", b"\x1f\x8b": "a gzip file",
+          b"PK\x03\x04": "a zip file", b"\xff\xfe": "a UTF-16 text file", b"\xfe\xff": "a UTF-16 text file"}
+
+
+def read_scenario_text(path) -> str:
+    """The text of a scenario file: UTF-8 (TOML's encoding), or a :class:`ScenarioError`
+    naming the file (a binary or NetCDF file, another encoding, an unreadable file)."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read it ({exc.strerror or exc}); give a readable TOML file") from None
+    for magic, what in _MAGIC.items():
+        if data.startswith(magic):
+            raise ScenarioError(f"{path}: is not a TOML scenario (it is {what}); give a scenario file "
+                                "(orbatt info/plot read results)")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: is not a TOML scenario: byte {data[exc.start]:#04x} at offset {exc.start} is "
+                            "not UTF-8 (TOML files are UTF-8 text); save it as UTF-8") from None

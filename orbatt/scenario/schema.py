@@ -24,6 +24,30 @@ Schema (the contract other tools read; quantities are strings astropy parses, e.
     [sweep]       optional: parameters varied over many cases, run by ``orbatt sweep``
                   (schema: :mod:`orbatt.scenario.sweep_schema`); ``orbatt run`` runs the nominal case
 
+Quantity rules (:func:`orbatt.scenario.fields.parse_quantity`): a string is one number and
+one unit, parsed whole (``"1 2 orbits"``, ``"0.01 planet orbits"`` are refused); the unit has
+the dimension of the key; **angles always carry an angle unit** (``"45 deg"``, ``"0.8 rad"``;
+``"45"``, ``45`` and ``"98.2 deg deg"`` are refused; a plain ``0`` is accepted), in
+dimensionless scenarios too; every value is finite. Physical ranges (:data:`RANGES`, in the
+internal units km, s, kg, rad; dimensional scenarios)::
+
+    [body] inertia          1e-20 .. 1e45 kg km^2 per moment (1e-14 kg m^2 .. 1e45)
+    [orbit] a               1 m .. 1e12 km, and the apoapsis a (1 + e) above the central
+                            body's surface (central_body = "earth"; a periapsis below it
+                            only warns, as in the paper's Sect. 6.2 orbit)
+    [orbit] gm              1e-15 .. 1e12 km^3 s^-2 (the Sun: 1.3e11)
+    [initial] omega         |w_k| <= 1e4 rad/s (a 95,000 rpm spin)
+    [integration] t_end     <= 1e15 s (30 million years)
+    [integration] rtol      10 machine epsilons .. 0.1; atol 0 .. 1 (q has |q| = 1: an
+                            atol above 1 leaves the attitude uncontrolled)
+    any other number        zero, or a magnitude in [1e-100, 1e100]
+
+Work limits, checked before the run: at most :data:`~orbatt.scenario.build.MAX_OUTPUTS`
+output times (``t_end / output_step``), and at most
+:data:`~orbatt.scenario.build.MAX_WORK_STEPS` integration steps by a lower estimate (the
+body's rotation angle ``|omega| t_end`` and twice the orbital angle, at most pi rad per
+step): a run past them would take hours or fail at ``max_steps``.
+
 Outputs fall exactly on ``k * output_step`` for ``k = 0 .. floor(t_end / output_step)``.
 ``Q`` is in the unit implied by the inertia and time units (kg km^2 s^-1 for a dimensional
 body; plain numbers for a dimensionless one).
@@ -45,8 +69,10 @@ from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quanti
 from .sweep_schema import SweepSpec, parse_sweep_table
 from .torques_schema import parse_torques
 from ..methods import METHODS
+from ..methods.problem import MAX_ATOL, MAX_RTOL
+from ..orbits import R_EARTH
 
-__all__ = ["Spec", "parse", "TOP_KEYS", "TABLES", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
+__all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
 
 TOP_KEYS = {"name", "description"}
 TABLES = {
@@ -61,6 +87,16 @@ TABLES = {
     "environment": None,
 }
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
+#: physical range of a key in a dimensional scenario, internal units (km, s, kg, rad), inclusive
+RANGES = {
+    "[body] inertia": (1e-20, 1e45),
+    "[orbit] a": (1e-3, 1e12),
+    "[orbit] gm": (1e-15, 1e12),
+    "[initial] omega": (-1e4, 1e4),
+    "[integration] t_end": (None, 1e15),
+}
+#: central body radii (km) below which an apoapsis is refused
+BODY_RADII = {"earth": R_EARTH}
 POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
 FRAMES = ("inertial", "orbital")
 PROVIDERS = ("kepler", "rebound", "tle")
@@ -113,6 +149,9 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ctx.error("TOML", f"{exc}; fix the syntax") from None
+    except RecursionError:
+        raise ctx.error("TOML", "arrays or tables nested too deeply to parse; scenario values are at most "
+                                "2 levels deep") from None
     _check_keys(ctx, data)
     body = data["body"]
     if "inertia" not in body:
@@ -121,7 +160,8 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     if not isinstance(inertia_raw, list) or len(inertia_raw) != 3:
         raise ctx.error("[body] inertia", f"expected [I1, I2, I3], got {inertia_raw!r}")
     dimless = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in inertia_raw)
-    inertia = parse_vector(ctx, "[body] inertia", inertia_raw, 3, U.INERTIA, dimensionless=dimless)
+    inertia = parse_vector(ctx, "[body] inertia", inertia_raw, 3, U.INERTIA, dimensionless=dimless,
+                           bounds=None if dimless else RANGES["[body] inertia"])
     try:  # the body's own validation (positive, triangle inequality), reported with the file
         RigidBody(inertia if dimless else inertia * U.INERTIA)
     except InputError as exc:
@@ -193,21 +233,23 @@ def _parse_orbit(ctx, o, source="<scenario>"):
     if "gm" in o and "central_body" in o:
         raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
     if "gm" in o:
-        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False)
-        if out["gm"] <= 0:
-            raise ctx.error("[orbit] gm", f"{o['gm']!r} must be positive")
+        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False,
+                                   bounds=RANGES["[orbit] gm"])
         out["central_body"] = None
     else:
         out["central_body"] = parse_choice(ctx, "[orbit] central_body", o.get("central_body", "earth"), ("earth",))
     for k in ("a", "e", "i", "raan", "argp"):
         if k not in o:
             raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
-    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False)
-    if out["a"] <= 0:
-        raise ctx.error("[orbit] a", f"{o['a']!r} must be positive (elliptic orbits only)")
+    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False, bounds=RANGES["[orbit] a"])
     out["e"] = parse_quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
     if not 0 <= out["e"] < 1:
         raise ctx.error("[orbit] e", f"{o['e']!r} is outside [0, 1): only elliptic orbits are supported")
+    radius = BODY_RADII.get(out["central_body"])
+    if radius is not None and out["a"] * (1 + out["e"]) < radius:
+        raise ctx.error("[orbit] a", f"{o['a']!r} with e = {out['e']:g}: the whole orbit (apoapsis "
+                                     f"{out['a'] * (1 + out['e']):.6g} km) lies inside the central body "
+                                     f"({out['central_body']}, radius {radius:.6g} km); raise a")
     for k in ("i", "raan", "argp"):
         out[k] = parse_quantity(ctx, f"[orbit] {k}", o[k], U.ANGLE, dimensionless=False)
     anomalies = [k for k in ("true_anomaly", "mean_anomaly") if k in o]
@@ -291,7 +333,8 @@ def _parse_initial(ctx, init, dimless):
     if "Q" in has:
         out["Q"] = parse_plain_vector(ctx, "[initial] Q", init["Q"], 4)
     if "omega" in has:
-        out["omega"] = parse_vector(ctx, "[initial] omega", init["omega"], 3, U.RATE, dimensionless=dimless)
+        out["omega"] = parse_vector(ctx, "[initial] omega", init["omega"], 3, U.RATE, dimensionless=dimless,
+                                    bounds=None if dimless else RANGES["[initial] omega"])
     if "euler_momenta" in has:
         out["euler_momenta"] = parse_vector(ctx, "[initial] euler_momenta", init["euler_momenta"], 3, U.MOMENTUM,
                                        dimensionless=dimless)
@@ -299,23 +342,23 @@ def _parse_initial(ctx, init, dimless):
 
 
 def _parse_integration(ctx, g, dimless, orbit):
-
     out = {"method": g.get("method", "dop853")}
-    if out["method"] not in METHODS:
+    if not isinstance(out["method"], str) or out["method"] not in METHODS:
         raise ctx.error("[integration] method", f"{out['method']!r} is not one of {', '.join(sorted(METHODS))}")
-    for k in ("rtol", "atol"):
+    for k, hi, why in (("rtol", MAX_RTOL, "a relative error above 10% gives no accuracy at all"),
+                       ("atol", MAX_ATOL, "|q| = 1, so an absolute error above 1 leaves the attitude uncontrolled")):
         if k in g:
             v = g[k]
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (v > 0 and math.isfinite(v)):
                 raise ctx.error(f"[integration] {k}", f"{v!r} must be a positive number")
+            if v > hi:
+                raise ctx.error(f"[integration] {k}", f"{v!r} is above {hi:g}: {why}; give e.g. {k} = 1e-10")
             out[k] = float(v)
     if "step" in g:
         out["step"] = parse_time(ctx, "[integration] step", g["step"], dimless, orbit)
     for k in ("t_end", "output_step"):
         if k not in g:
             raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")
-        out[k] = parse_time(ctx, f"[integration] {k}", g[k], dimless, orbit)
-        if out[k][1] <= 0:
-            raise ctx.error(f"[integration] {k}", f"{g[k]!r} must be positive")
+        out[k] = parse_time(ctx, f"[integration] {k}", g[k], dimless, orbit,
+                            bounds=None if dimless else RANGES.get(f"[integration] {k}"))
     return out
-

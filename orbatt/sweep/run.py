@@ -8,9 +8,12 @@ import math
 import os
 import secrets
 import shutil
+import signal
 import sys
+import threading
 import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -259,6 +262,10 @@ def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, p
                 handle(a, b, run_chunk(sweep.job(a, b)))
         elif todo:
             _run_on_dask(client, sweep, todo, parts, handle)
+    except BaseException:
+        if owned_client:
+            _quiet_dask_logs()
+        raise
     finally:
         if owned_client:
             client.close()
@@ -344,6 +351,35 @@ def sweep_global_attrs(ds, sweep, stats, run):
     return ds
 
 
+@contextmanager
+def _workers_ignore_sigint():
+    """Start worker processes with SIGINT ignored (inherited through exec): Ctrl-C in a
+    terminal signals the whole process group, and each worker would print its own
+    KeyboardInterrupt traceback; this process alone handles it and closes the cluster.
+    The cost: a Ctrl-C in the seconds the cluster takes to start is ignored (press it
+    again). (Blocking SIGINT instead does not reach the workers: they are spawned with it
+    unblocked.) The workers log only CRITICAL messages (``silence_logs``): a failed task
+    reaches this process as an exception, and a worker whose scheduler closed on Ctrl-C
+    would log tracebacks."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _quiet_dask_logs():
+    """Silence dask.distributed's loggers: a cluster closed on Ctrl-C (or after a failure)
+    logs the tasks it cancels as errors, tracebacks included."""
+    import logging
+
+    for name in ("distributed", "tornado", "asyncio"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+
+
 def open_client(scheduler, workers, *, timeout=120.0, notify=None):
     """A Dask client: ``(client, cluster_or_None)``. ``scheduler`` None: a local cluster of
     ``workers`` single-threaded processes on 127.0.0.1 (returned, to close); an address: a
@@ -358,8 +394,9 @@ def open_client(scheduler, workers, *, timeout=120.0, notify=None):
         import logging
 
         n = workers or os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None, silence_logs=logging.ERROR)
+        with _workers_ignore_sigint():
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   dashboard_address=None, silence_logs=logging.CRITICAL)
         return Client(cluster), cluster
     try:
         client = Client(scheduler)  # waits up to dask's distributed.comm.timeouts.connect
