@@ -16,8 +16,9 @@ from .scenario import Scenario, load_scenario
 from .state import State
 from . import orbital
 from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to_orbital
-from .orbits import KeplerOrbit, ReboundOrbit
+from .orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from .potentials import GravityGradient
+from .torques import EnvironmentTorques, Facet
 from .sweep import Sweep, load_sweep, run_sweep
 from .version import __version__
 
@@ -26,7 +27,7 @@ __all__ = [
     "Method", "METHODS", "methods", "register", "Problem", "ProgressInfo",
     "OrbattError", "InputError", "IntegrationError", "ScenarioError",
     "quaternion", "canonical", "euler", "__version__",
-    "KeplerOrbit", "ReboundOrbit", "GravityGradient", "orbital",
+    "KeplerOrbit", "ReboundOrbit", "TleOrbit", "GravityGradient", "EnvironmentTorques", "Facet", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
     "to_dataset", "open_dataset", "write_aem", "read_aem",
     "Sweep", "SweepError", "load_sweep", "run_sweep",
