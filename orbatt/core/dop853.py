@@ -47,7 +47,7 @@ from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VA
                    FLAG_REJECTED, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, jit, jit_inline,
                    jit_parallel, keepalive)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES, ORDER
-from .hamiltonian import rhs
+from .hamiltonian import rhs, rhs_inline
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
@@ -317,7 +317,7 @@ def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, par
                     ytmp[i] += a * K[j, i]
             for i in range(NDIM):
                 ytmp[i] = y[i] + hh * ytmp[i]
-            rhs(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
+            rhs_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
         cnt[CNT_NFEV] += N_STAGES - 1
         # --- 8th-order solution and error estimate
         e5 = 0.0

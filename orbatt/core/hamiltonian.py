@@ -37,8 +37,7 @@ def eq7(q, Q, inertia):
     return qmul(q, a), qmul(Q, a)
 
 
-@jit_inline
-def rhs(t, y, inertia, terms, params, table, work, dy):
+def _rhs(t, y, inertia, terms, params, table, work, dy):
     """Write ``dy/dt`` (eq. 7) into ``dy`` for the model ``terms, params, table``."""
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
@@ -61,6 +60,13 @@ def _lanes_one_term(kind, p0, c, Y, nl, I, params, dY):
         for k in range(4):
             dY[k, l] = 0.25 * qd[k]
             dY[4 + k, l] = 0.25 * Qd[k] - g[k]
+
+
+#: :func:`_rhs` compiled once and called (the cold call sites: first derivatives, FSAL)
+rhs = jit(_rhs)
+#: the same function inlined at numba-IR level into the hot stage loop of the step loops (one
+#: site per loop: every inlined site costs its type inference and lowering again)
+rhs_inline = jit_inline(_rhs)
 
 
 @jit

@@ -99,7 +99,7 @@ SHADOW_NONE, SHADOW_CYLINDRICAL, SHADOW_CONICAL = 0, 1, 2
 # Kernels
 
 
-@jit_inline
+@jit
 def orbit_radial(t, terms, params, table, work):
     """``(r, xhat, v)``: radius, radial unit vector and velocity (inertial components) of the
     model's orbit at ``t``. The velocity is computed only when a term reads it (row 0's
@@ -120,7 +120,7 @@ def orbit_radial(t, terms, params, table, work):
     return 1.0, (1.0, 0.0, 0.0), (0.0, 0.0, 0.0)
 
 
-@jit_inline
+@jit
 def _drag_constants(rho, params, p0, r, xhat, v):
     """``(1/2 rho |v_rel|^2, v_rel / |v_rel|)`` of a drag term for the density ``rho``;
     ``v_rel = v - omega s3 x r`` (``omega = params[p0]``: the atmosphere's rotation)."""
@@ -134,7 +134,7 @@ def _drag_constants(rho, params, p0, r, xhat, v):
     return (0.5 * rho * speed * speed, vx / speed, vy / speed, vz / speed)
 
 
-@jit_inline
+@jit
 def _srp_constants(sun, params, p0, r, xhat):
     """``(P, s^)`` of an SRP term: the pressure ``nu P1AU (AU / d)^2`` with the shadow
     function ``nu`` and the unit vector ``s^`` from the body to the Sun (``sun``: the Sun's
@@ -167,16 +167,23 @@ def term_constants(j, t, terms, params, table, work, r, xhat, v):
         return kind, p0, (params[p0] / (r * r * r), xhat[0], xhat[1], xhat[2])
     elif kind == HEAVY_TOP:
         return kind, p0, (params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
-    elif kind == DRAG:
-        rho = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 1, terms[j, FLAGS], work)[0]
-        return kind, p0, _drag_constants(rho, params, p0, r, xhat, v)
-    elif kind == SRP:
-        sun = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
-        return kind, p0, _srp_constants(sun, params, p0, r, xhat)
-    elif kind == MAGNETIC:
-        b = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
-        return kind, p0, (b[0], b[1], b[2], 0.0)
+    elif kind == DRAG or kind == SRP or kind == MAGNETIC:
+        return kind, p0, _environment_constants(kind, t, table[terms[j, R0]:terms[j, R1]], terms[j, FLAGS], work,
+                                                params, p0, r, xhat, v)
     return kind, p0, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit
+def _environment_constants(kind, t, tab, slot, work, params, p0, r, xhat, v):
+    """:func:`term_constants` of the environment terms (drag, SRP, magnetic), compiled once
+    and called (not inlined: inlining them into every step loop multiplied the compile time
+    of every run, which mostly does not use them)."""
+    if kind == DRAG:
+        return _drag_constants(env.spline_eval(tab, t, 1, slot, work)[0], params, p0, r, xhat, v)
+    elif kind == SRP:
+        return _srp_constants(env.spline_eval(tab, t, 3, slot, work), params, p0, r, xhat)
+    b = env.spline_eval(tab, t, 3, slot, work)
+    return (b[0], b[1], b[2], 0.0)
 
 
 @jit_inline
@@ -188,29 +195,39 @@ def term_value(kind, p0, c, q, inertia, params):
         return pot.gravity_gradient(q, inertia, c[0], (c[1], c[2], c[3]))
     elif kind == HEAVY_TOP:
         return pot.heavy_top(q, c)
-    elif kind == DRAG:
+    elif kind == DRAG or kind == SRP or kind == MAGNETIC:
+        return 0.0, _environment_gradient(kind, c, q, params, p0)
+    return 0.0, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit
+def _environment_gradient(kind, c, q, params, p0):
+    """:func:`term_value` of the environment terms (compiled once and called, as
+    :func:`_environment_constants`): ``G = -2 q (0, tau)``."""
+    if kind == DRAG:
         tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 1]))
-        return 0.0, trq.gradient_of_torque(q, tau)
     elif kind == SRP:
         tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
-        return 0.0, trq.gradient_of_torque(q, tau)
-    elif kind == MAGNETIC:
+    else:
         tau = trq.dipole_torque(q, (params[p0], params[p0 + 1], params[p0 + 2]), (c[0], c[1], c[2]))
-        return 0.0, trq.gradient_of_torque(q, tau)
-    return 0.0, (0.0, 0.0, 0.0, 0.0)
+    return trq.gradient_of_torque(q, tau)
 
 
 @jit_inline
 def terms_at(t, q, inertia, terms, params, table, work, r, xhat, v):
     """``(U, G)`` summed over the terms (rows ``1..n``) at the attitude ``q`` (4-tuple), the
     orbit's ``r``, ``xhat`` and ``v`` given; starts from the first term's value."""
-    kind, p0, c = term_constants(1, t, terms, params, table, work, r, xhat, v)
-    U, G = term_value(kind, p0, c, q, inertia, params)
-    for j in range(2, terms.shape[0]):
+    U = 0.0
+    G = (0.0, 0.0, 0.0, 0.0)
+    for j in range(1, terms.shape[0]):
         kind, p0, c = term_constants(j, t, terms, params, table, work, r, xhat, v)
         u, g = term_value(kind, p0, c, q, inertia, params)
-        U += u
-        G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
+        if j == 1:  # the sum starts from the first term's value (one term: its exact numbers)
+            U = u
+            G = g
+        else:
+            U += u
+            G = (G[0] + g[0], G[1] + g[1], G[2] + g[2], G[3] + g[3])
     return U, G
 
 
