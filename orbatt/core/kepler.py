@@ -213,6 +213,21 @@ def _perifocal(orb):
     return P, Q, math.sqrt((1.0 - e) * (1.0 + e)), 1.0 - e
 
 
+@jit_inline
+def _radial(t, orb, work):
+    """``(r, xhat, sin E, cos E, P, Q, sqrt(1 - e^2))`` at time ``t`` (Kepler's equation
+    warm-started from ``work``); shared by :func:`kepler_radial` and :func:`kepler_state`."""
+    a = orb[0]
+    e = orb[1]
+    P, Q, sq, ome = _perifocal(orb)
+    _, s, c, _ = _solve(orb[5] + orb[6] * t, e, work)
+    omc = _one_minus_cos(s, c)
+    rr = ome + e * omc  # 1 - e cos E
+    cf = (ome - omc) / rr  # cos f
+    sf = sq * s / rr  # sin f
+    return a * rr, (cf * P[0] + sf * Q[0], cf * P[1] + sf * Q[1], cf * P[2] + sf * Q[2]), s, c, P, Q, sq
+
+
 @jit
 def kepler_radial(t, orb, work):
     """Radius and radial unit vector in ``S`` at time ``t``.
@@ -222,15 +237,8 @@ def kepler_radial(t, orb, work):
     :func:`solve_kepler_warm`). ``cos f = (cos E - e) / (1 - e cos E)`` and
     ``sin f = sqrt(1 - e^2) sin E / (1 - e cos E)`` are formed without cancellation.
     """
-    a = orb[0]
-    e = orb[1]
-    P, Q, sq, ome = _perifocal(orb)
-    _, s, c, _ = _solve(orb[5] + orb[6] * t, e, work)
-    omc = _one_minus_cos(s, c)
-    rr = ome + e * omc  # 1 - e cos E
-    cf = (ome - omc) / rr  # cos f
-    sf = sq * s / rr  # sin f
-    return a * rr, (cf * P[0] + sf * Q[0], cf * P[1] + sf * Q[1], cf * P[2] + sf * Q[2])
+    r, xhat, _, _, _, _, _ = _radial(t, orb, work)
+    return r, xhat
 
 
 @jit
@@ -241,20 +249,12 @@ def kepler_state(t, orb, work):
     operations), and ``v = n a^2 / r (-sin E P + sqrt(1 - e^2) cos E Q)`` (length unit of
     ``a`` per time unit; ``n a^2 = sqrt(GM a)``).
     """
+    r, xhat, s, c, P, Q, sq = _radial(t, orb, work)
     a = orb[0]
-    e = orb[1]
-    P, Q, sq, ome = _perifocal(orb)
-    _, s, c, _ = _solve(orb[5] + orb[6] * t, e, work)
-    omc = _one_minus_cos(s, c)
-    rr = ome + e * omc  # 1 - e cos E
-    cf = (ome - omc) / rr  # cos f
-    sf = sq * s / rr  # sin f
-    r = a * rr
     vfac = orb[6] * a * a
     vs = -vfac * s / r
     vc = vfac * sq * c / r
-    return (r, (cf * P[0] + sf * Q[0], cf * P[1] + sf * Q[1], cf * P[2] + sf * Q[2]),
-            (vs * P[0] + vc * Q[0], vs * P[1] + vc * Q[1], vs * P[2] + vc * Q[2]))
+    return r, xhat, (vs * P[0] + vc * Q[0], vs * P[1] + vc * Q[1], vs * P[2] + vc * Q[2])
 
 
 @jit

@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from ._jit import jit, jit_inline
+from .environment import find_row
 
 TABLE_COLUMNS = 10
 #: index in ``work`` of the last interval used
@@ -46,29 +47,7 @@ def find_interval(table, t, work):
     if not (t >= table[0, 0] and t <= table[n - 1, 0]):
         raise ValueError("sampled orbit: time outside the sampled span; build the orbit "
                          "(ReboundOrbit) over a longer span")
-    w = work[WORK_SLOT]
-    if w == w:
-        i = int(w)
-        if 0 <= i < n - 1:
-            if table[i, 0] <= t:
-                if t <= table[i + 1, 0]:
-                    return i
-                if i + 2 < n and t <= table[i + 2, 0]:
-                    work[WORK_SLOT] = i + 1
-                    return i + 1
-            elif i >= 1 and table[i - 1, 0] <= t:
-                work[WORK_SLOT] = i - 1
-                return i - 1
-    lo = 0
-    hi = n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if table[mid, 0] <= t:
-            lo = mid
-        else:
-            hi = mid
-    work[WORK_SLOT] = lo
-    return lo
+    return find_row(table, t, work, WORK_SLOT)
 
 
 @jit_inline
