@@ -167,3 +167,29 @@ def test_drag_with_gravity_gradient_in_the_step_loop():
     H.rhs(50.0, y, np.array([1e-5, 2e-5, 3e-5]), *model, kp.new_work(), dy)
     assert np.abs(dy[4:]).max() > 0.0
     assert abs(y[:4] @ dy[4:] + y[4:] @ dy[:4]) < 1e-14 * np.abs(dy[4:]).max()
+
+
+def test_environment_terms_in_lanes_are_the_single_member_operations():
+    """A model of all four terms through rhs_lanes (the per-term loops) equals rhs member by
+    member, bitwise, for an odd group."""
+    F = _facets()
+    ts, rs, _, _ = _orbit_samples()
+    dens = spline_table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
+    sun = spline_table(ts, np.array([1.2e8, -8.0e7, 3.0e7]) + ts[:, None] * np.array([1.0, 2.0, 0.5]))
+    bf = spline_table(ts, 3e-5 * np.stack([np.cos(ts / 900.0), np.sin(ts / 700.0), 0.3 * np.ones_like(ts)], axis=1))
+    model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
+                     terms=[(km.GRAVITY_GRADIENT, [GM], None), (km.DRAG, km.drag_params(F, WE), dens),
+                            (km.SRP, km.srp_params(F, 4.5e-3, 1.495978707e8, km.SHADOW_CONICAL, REQ, 696000.0), sun),
+                            (km.MAGNETIC, [5e-9, 0.0, 2e-9], bf)])
+    L = 7
+    Y = np.ascontiguousarray(np.array([np.r_[qt.normalize(rng.normal(size=4)), rng.normal(size=4) * 1e-9]
+                                       for _ in range(L)]).T)
+    I = np.ascontiguousarray(np.tile([[3e-8], [3e-8], [1e-8]], (1, L)))
+    dY = np.empty((8, L))
+    G = np.empty((4, L))
+    for t in (0.0, 1500.0):
+        H.rhs_lanes(t, Y, L, I, *model, kp.new_work(), G, dY)
+        for l in range(L):
+            dy = np.empty(8)
+            H.rhs(t, np.ascontiguousarray(Y[:, l]), np.ascontiguousarray(I[:, l]), *model, kp.new_work(), dy)
+            np.testing.assert_array_equal(dY[:, l], dy)
