@@ -16,7 +16,7 @@ SHORT = {  # t_end for a short CI run of each shipped scenario
     "paper-torque-free": "2", "paper-heavy-top": "2", "paper-keplerian": '"600 s"',
     "gg-stabilized-leo": '"600 s"', "molniya-tumbling": '"600 s"', "mercury-3-2": '"10 d"',
     "hyperion-chaotic": '"5 d"', "sso-j2-rebound": '"300 s"', "gg-leo-dispersion": '"600 s"',
-    "iss-tle-gravity-gradient": '"600 s"',
+    "iss-tle-gravity-gradient": '"600 s"', "mercury-3-2-normalized": "0.7", "hyperion-chaotic-normalized": "1.5",
 }
 
 

@@ -125,7 +125,7 @@ def test_potential_object_and_validation(paper):
     assert d["kind"] == "gravity-gradient" and d["orbit"]["type"] == "kepler"
     with pytest.raises(InputError, match="orbit: expected an orbit provider"):
         GravityGradient("kepler")
-    with pytest.raises(InputError, match="body: the gravity-gradient potential needs a dimensional body"):
+    with pytest.raises(InputError, match="body: plain-number inertia with a dimensional orbit"):
         gg.check_body(RigidBody([400.0, 500.0, 600.0]))
     ro = ReboundOrbit(paper, 600 * u.s)
     gr = GravityGradient(ro)

@@ -119,7 +119,7 @@ def test_frame_helpers_with_a_rebound_orbit(body, paper):
 
 
 def test_bad_input(body, paper):
-    with pytest.raises(InputError, match="body: orbital-frame states need a dimensional body"):
+    with pytest.raises(InputError, match="body: the body and the orbit must be both dimensional"):
         orb.state_from_orbital(RigidBody([1.0, 2.0, 2.5]), paper)
     with pytest.raises(InputError, match="q_BO: .* is not 1"):
         orb.state_from_orbital(body, paper, [1.0, 0.1, 0, 0])

@@ -39,8 +39,10 @@ class ReboundOrbit(SampledOrbit):
     ----------
     initial : KeplerOrbit
         The osculating orbit at the epoch (``t = 0``): its state vector starts the
-        integration; its ``gm``, ``central_body``, ``epoch`` are used.
-    t_end : Quantity (time) or str
+        integration; its ``gm``, ``central_body``, ``epoch`` are used. A dimensionless
+        orbit (plain ``a`` and ``gm``) makes a dimensionless REBOUND orbit: ``t_end``,
+        ``dt`` and ``reference_radius`` are then plain numbers in its units.
+    t_end : Quantity (time), str, or float (dimensionless orbit)
         End of the sampled span (``> 0``); the orbit is available for ``0 <= t <= t_end``
         (the last sample may lie slightly beyond). Times outside raise.
     perturbations : sequence of str, optional
@@ -113,7 +115,8 @@ class ReboundOrbit(SampledOrbit):
         self.central_body = initial.central_body
         self.epoch = initial.epoch
         self.period = initial.period
-        te = U.strip(t_end, U.TIME, "t_end")
+        self.dimensionless = dimless = initial.dimensionless
+        te = U.strip(t_end, U.TIME, "t_end", allow_plain=dimless)
         if te.shape != () or not te > 0:
             raise InputError(f"t_end: {t_end!r} must be one positive time, e.g. '1 d'")
         self.t_end = float(te)
@@ -147,13 +150,15 @@ class ReboundOrbit(SampledOrbit):
             if self.central_body == "earth":
                 self.j2 = J2_EARTH if j2 is None else float(U.strip(j2, U.DIMENSIONLESS, "j2"))
                 self.reference_radius = (R_J2_EARTH if reference_radius is None
-                                         else float(U.strip(reference_radius, U.LENGTH, "reference_radius")))
+                                         else float(U.strip(reference_radius, U.LENGTH, "reference_radius",
+                                                                allow_plain=dimless)))
             else:
                 if j2 is None or reference_radius is None:
                     raise InputError(f"j2: the J2 perturbation about {self.central_body!r} needs j2=... and "
                                      "reference_radius=... (only the Earth's are built in)")
                 self.j2 = float(U.strip(j2, U.DIMENSIONLESS, "j2"))
-                self.reference_radius = float(U.strip(reference_radius, U.LENGTH, "reference_radius"))
+                self.reference_radius = float(U.strip(reference_radius, U.LENGTH, "reference_radius",
+                                                      allow_plain=dimless))
             if not self.reference_radius > 0:
                 raise InputError(f"reference_radius: {reference_radius!r} must be positive")
         self.epsilon = None
@@ -168,7 +173,7 @@ class ReboundOrbit(SampledOrbit):
         else:
             if epsilon is not None:
                 raise InputError("epsilon: only used by integrator='ias15'; remove it or give dt for WHFast")
-            self.dt = self.period / n if dt is None else float(U.strip(dt, U.TIME, "dt"))
+            self.dt = self.period / n if dt is None else float(U.strip(dt, U.TIME, "dt", allow_plain=dimless))
             if not self.dt > 0:
                 raise InputError(f"dt: {dt!r} must be a positive time")
         table = self._integrate()
@@ -302,16 +307,17 @@ class ReboundOrbit(SampledOrbit):
         d = self.initial.describe()
         d["type"] = "rebound"
         d.update({"perturbations": list(self.perturbations), "integrator": self.integrator,
-                  "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
+                  ("t_end" if self.dimensionless else "t_end_s"): self.t_end, "samples_per_orbit": self.samples_per_orbit,
                   "n_samples": int(self._table.shape[0]), "rebound_version": rebound.__version__})
         if self.integrator == "ias15":
             d["epsilon"] = self.epsilon if self.epsilon is not None else 1e-9
         else:
-            d["dt_s"] = self.dt
+            d["dt" if self.dimensionless else "dt_s"] = self.dt
         if self.j2 is not None:
             import reboundx
 
-            d.update({"j2": self.j2, "reference_radius_km": self.reference_radius,
+            d.update({"j2": self.j2, ("reference_radius" if self.dimensionless else "reference_radius_km"):
+                      self.reference_radius,
                       "reboundx_version": reboundx.__version__})
         if self.epoch is not None:
             d["epoch"] = epoch_string(self.epoch)

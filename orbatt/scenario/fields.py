@@ -62,8 +62,8 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless):
         except (TypeError, ValueError):
             raise ctx.error(where, f"cannot parse {value!r} as a quantity; write e.g. '1 {unit.to_string()}'") from None
         if dimensionless and unit not in (U.DIMENSIONLESS, U.ANGLE) and q.unit != U.DIMENSIONLESS:
-            raise ctx.error(where, f"{value!r} has a unit but the scenario is dimensionless (plain-number "
-                                  "inertia); give a plain number or give the inertia with units")
+            raise ctx.error(where, f"{value!r} has a unit but [body] inertia is plain numbers (normalized units); "
+                                  "give a plain number or give the inertia with units")
         try:
             eq = u.dimensionless_angles() if unit == U.ANGLE else []
             return float(q.to_value(unit, equivalencies=eq))

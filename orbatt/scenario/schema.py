@@ -5,7 +5,10 @@ and tables are refused, every quantity is checked for its dimension) and returns
 :class:`Scenario` whose :meth:`Scenario.run` returns the result Dataset.
 
 Schema (the contract other tools read; quantities are strings astropy parses, e.g.
-``"7000 km"``, ``"30 deg"``, ``"0.001 rad / s"``; plain numbers mean dimensionless)::
+``"7000 km"``, ``"30 deg"``, ``"0.001 rad / s"``; plain numbers mean dimensionless: a
+scenario written in plain numbers throughout, ``gm`` and ``a`` included, is in normalized
+units, lengths in the unit of ``a`` and times in the unit ``gm`` implies; a mix of plain and
+dimensional quantities is refused naming the first plain key)::
 
     name = "..."                  # optional; defaults to the file name
     description = "..."           # optional, one line
@@ -148,10 +151,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     if kind == "gravity-gradient":
         if "orbit" not in data:
             raise ctx.error("[orbit]", "missing table; the gravity-gradient potential needs an orbit")
-        if dimless:
-            raise ctx.error("[body] inertia", "the gravity-gradient potential needs a dimensional inertia "
-                                              "(e.g. '400 kg km2') to go with the orbit's units")
-        orbit = _parse_orbit(ctx, data["orbit"], source)
+        orbit = _parse_orbit(ctx, data["orbit"], source, dimless)
     elif "orbit" in data:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
@@ -175,8 +175,25 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
                 integration=integ, sweep=sweep)
 
 
-def _parse_orbit(ctx, o, source="<scenario>"):
+def _check_normalized_orbit(ctx, o):
+    """A dimensionless scenario's orbit (normalized units): ``gm`` given as a plain number, no
+    named central body, no calendar epoch, no TLE."""
+    if o.get("provider") == "tle":
+        raise ctx.error("[orbit] provider", "'tle' needs a dimensional scenario, but [body] inertia is plain numbers "
+                                            "(normalized units); give the inertia with units, e.g. '400 kg m^2'")
+    for k in ("central_body", "epoch"):
+        if k in o:
+            raise ctx.error(f"[orbit] {k}", "not used in normalized units ([body] inertia is plain numbers): remove "
+                                            "it and give gm as a plain number (gm = 1.0 with a = 1.0: mean motion 1)")
+    if "gm" not in o:
+        raise ctx.error("[orbit] gm", "missing; in normalized units ([body] inertia is plain numbers) give gm as a "
+                                      "plain number (gm = 1.0 with a = 1.0 makes the mean motion 1)")
+
+
+def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
     out = {}
+    if dimless:
+        _check_normalized_orbit(ctx, o)
     out["provider"] = parse_choice(ctx, "[orbit] provider", o.get("provider", "kepler"), PROVIDERS)
     if out["provider"] == "tle":
         return _parse_tle_orbit(ctx, o, source)
@@ -186,7 +203,7 @@ def _parse_orbit(ctx, o, source="<scenario>"):
     if "gm" in o and "central_body" in o:
         raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
     if "gm" in o:
-        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False)
+        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=dimless)
         if out["gm"] <= 0:
             raise ctx.error("[orbit] gm", f"{o['gm']!r} must be positive")
         out["central_body"] = None
@@ -195,7 +212,7 @@ def _parse_orbit(ctx, o, source="<scenario>"):
     for k in ("a", "e", "i", "raan", "argp"):
         if k not in o:
             raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
-    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False)
+    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=dimless)
     if out["a"] <= 0:
         raise ctx.error("[orbit] a", f"{o['a']!r} must be positive (elliptic orbits only)")
     out["e"] = parse_quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
@@ -208,6 +225,7 @@ def _parse_orbit(ctx, o, source="<scenario>"):
         raise ctx.error("[orbit] true_anomaly", "give exactly one of true_anomaly or mean_anomaly")
     out["anomaly_kind"] = anomalies[0]
     out["anomaly"] = parse_quantity(ctx, f"[orbit] {anomalies[0]}", o[anomalies[0]], U.ANGLE, dimensionless=False)
+    out["dimensionless"] = dimless
     if "epoch" in o:
         try:  # the orbit providers' own parser: a string astropy parses, taken as UTC
             out["epoch"] = parse_epoch(str(o["epoch"]))

@@ -250,7 +250,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             if name in ("orbit_true_anomaly", "orbit_mean_anomaly") and name[6:] != orbit["anomaly_kind"]:
                 raise ctx.error(where, f"the [orbit] gives {orbit['anomaly_kind']}; vary orbit_{orbit['anomaly_kind']}")
         unit = parameter_unit(p.kind)
-        dimless = dimensionless if p.kind in ("inertia", "rate") else p.kind in ("one", "angle")
+        dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
         cf = units[name]
 
         def q(key, value, _where=where, _unit=unit, _dimless=dimless):
