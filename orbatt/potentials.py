@@ -196,3 +196,6 @@ class GravityGradient(Potential):
 
     def describe(self):
         return {"kind": self.name, "orbit": self.orbit.describe()}
+
+    def __repr__(self):
+        return f"GravityGradient(orbit={self.orbit!r})"

@@ -65,8 +65,9 @@ class OrbitProvider:
     ----------
     gm : float
         Central body's mass parameter (km^3 s^-2).
-    period : float
-        Orbital period (s) (Keplerian; of the initial osculating orbit for REBOUND).
+    period : Quantity
+        Orbital period (s) (Keplerian; of the initial osculating orbit for REBOUND); the
+        float is ``period_value``.
     epoch : astropy.time.Time or None
         The instant ``t = 0``.
     central_body : str
@@ -77,7 +78,9 @@ class OrbitProvider:
     """
 
     gm: float
-    period: float
+    #: orbital period as a float in the orbit's time unit (s; normalized units for a
+    #: dimensionless orbit); :attr:`period` is the same as a Quantity
+    period_value: float
     #: True for an orbit in normalized units (plain numbers: lengths in the unit of ``a``,
     #: times in the unit ``gm`` implies); it acts only on dimensionless bodies
     dimensionless = False
@@ -85,6 +88,17 @@ class OrbitProvider:
     central_body = "earth"
     name = "orbit"
     time_span = None
+
+    @property
+    def time_unit(self):
+        """The unit of the orbit's times: ``s``, or dimensionless in normalized units."""
+        return U.DIMENSIONLESS if self.dimensionless else U.TIME
+
+    @property
+    def period(self):
+        """Orbital period as a Quantity (s, or dimensionless in normalized units); the float
+        is :attr:`period_value`."""
+        return self.period_value * self.time_unit
 
     # ---- contract (subclasses implement state(), kernel(), describe()) ------------------
     def state(self, t):  # pragma: no cover - abstract

@@ -80,8 +80,8 @@ class KeplerOrbit(OrbitProvider):
     >>> import astropy.units as u
     >>> orbit = KeplerOrbit(7000 * u.km, 0.2, 30 * u.deg, 45 * u.deg, 15 * u.deg,
     ...                     true_anomaly=0 * u.deg, body_radius=None)
-    >>> round(orbit.period, 1)
-    5828.5
+    >>> orbit.period.round(1)
+    <Quantity 5828.5 s>
     """
 
     name = "kepler"
@@ -130,14 +130,15 @@ class KeplerOrbit(OrbitProvider):
             M0 = _mean_from_eccentric(anom, ev)
         else:
             M0 = anom
-        self.a = av
+        self.a_value = av
+        self._a_unit = a.unit if isinstance(a, u.Quantity) else (u.Quantity(a).unit if isinstance(a, str) else None)
         self.e = ev
         self.inc = inc
         self.raan = _angle(raan, "raan")
         self.argp = _angle(argp, "argp")
         self.M0 = M0
-        self.n = math.sqrt(self.gm / av**3)
-        self.period = 2.0 * math.pi / self.n
+        self.n_value = math.sqrt(self.gm / av**3)
+        self.period_value = 2.0 * math.pi / self.n_value
         self.epoch = parse_epoch(epoch)
         if isinstance(body_radius, str) and body_radius == "default":
             self.body_radius = R_EARTH if self.central_body == "earth" else None
@@ -149,7 +150,35 @@ class KeplerOrbit(OrbitProvider):
                 raise InputError(f"body_radius: {body_radius!r} must be one positive length, or None")
             self.body_radius = float(br)
         check_periapsis(av, ev, self.body_radius, self.central_body)
-        self._orb = kk.orbit_vector(av, ev, inc, self.raan, self.argp, M0, self.n)
+        self._orb = kk.orbit_vector(av, ev, inc, self.raan, self.argp, M0, self.n_value)
+
+    # ---- in the user's units ----------------------------------------------------------
+    @property
+    def a(self):
+        """Semi-major axis as a Quantity, in the unit it was given in (km for a string such
+        as ``"7000 km"``; dimensionless in normalized units); the float in km is ``a_value``."""
+        if self.dimensionless:
+            return self.a_value * U.DIMENSIONLESS
+        q = self.a_value * U.LENGTH
+        return q.to(self._a_unit) if self._a_unit is not None else q
+
+    @property
+    def n(self):
+        """Mean motion ``sqrt(GM / a^3)`` as a Quantity (rad/s; dimensionless in normalized
+        units); the float is ``n_value``."""
+        return self.n_value * (U.DIMENSIONLESS if self.dimensionless else U.RATE)
+
+    def __repr__(self):
+        if self.dimensionless:
+            head = f"a={self.a_value:.10g}, gm={self.gm:.10g} (normalized units)"
+            tail = f"period={self.period_value:.10g}"
+        else:
+            head = f"a={self.a:.10g}, central_body={self.central_body!r}, gm={self.gm:.10g} km^3 / s^2"
+            tail = f"period={self.period_value:.10g} s"
+        deg = 180.0 / math.pi
+        ep = f", epoch={epoch_string(self.epoch)}" if self.epoch is not None else ""
+        return (f"KeplerOrbit({head}, e={self.e:.10g}, i={self.inc * deg:.10g} deg, raan={self.raan * deg:.10g} deg, "
+                f"argp={self.argp * deg:.10g} deg, mean_anomaly={self.M0 * deg:.10g} deg, {tail}{ep})")
 
     # ---- alternative constructor ------------------------------------------------------
     @classmethod
@@ -206,7 +235,7 @@ class KeplerOrbit(OrbitProvider):
     def mean_anomaly(self, t):
         """Mean anomaly ``M0 + n t`` (rad, not wrapped); shape ``t.shape``."""
         t = as_times(t)
-        return self.M0 + self.n * t
+        return self.M0 + self.n_value * t
 
     def eccentric_anomaly(self, t):
         """Eccentric anomaly (rad, on the revolution of the mean anomaly)."""
@@ -248,7 +277,7 @@ class KeplerOrbit(OrbitProvider):
         """Angular velocity of ``O`` relative to ``S`` in ``O`` components (rad/s):
         ``(0, 0, df/dt)`` with ``df/dt = h / r^2``."""
         r = self.radius(t)
-        h = math.sqrt(self.gm * self.a * (1.0 - self.e) * (1.0 + self.e))
+        h = math.sqrt(self.gm * self.a_value * (1.0 - self.e) * (1.0 + self.e))
         z = np.zeros_like(r)
         return np.stack([z, z, h / r**2], axis=-1)
 
@@ -267,7 +296,7 @@ class KeplerOrbit(OrbitProvider):
     def elements(self):
         """``dict`` of the elements at the epoch: ``a`` (km), ``e``, ``i``, ``raan``,
         ``argp``, ``mean_anomaly``, ``true_anomaly`` (rad)."""
-        return {"a": self.a, "e": self.e, "i": self.inc, "raan": self.raan, "argp": self.argp,
+        return {"a": self.a_value, "e": self.e, "i": self.inc, "raan": self.raan, "argp": self.argp,
                 "mean_anomaly": self.M0, "true_anomaly": float(self.true_anomaly(0.0))}
 
     def describe(self):
@@ -277,11 +306,11 @@ class KeplerOrbit(OrbitProvider):
         ``units = "normalized"`` and ``gm``, ``a``, ``period`` in its units instead."""
         if self.dimensionless:  # normalized units: the keys carry no unit
             d = {"type": "kepler", "units": "normalized", "central_body": self.central_body, "gm": self.gm,
-                 "a": self.a}
+                 "a": self.a_value}
         else:
-            d = {"type": "kepler", "central_body": self.central_body, "gm_km3_s2": self.gm, "a_km": self.a}
+            d = {"type": "kepler", "central_body": self.central_body, "gm_km3_s2": self.gm, "a_km": self.a_value}
         d.update({"e": self.e, "i_rad": self.inc, "raan_rad": self.raan, "argp_rad": self.argp,
-                  "mean_anomaly_rad": self.M0, ("period" if self.dimensionless else "period_s"): self.period})
+                  "mean_anomaly_rad": self.M0, ("period" if self.dimensionless else "period_s"): self.period_value})
         if self.epoch is not None:
             d["epoch"] = epoch_string(self.epoch)
         return d

@@ -49,7 +49,8 @@ def build_rebound_orbit(ctx, o, kepler, t_end):
     orbit) over ``[0, t_end]`` (s), with the table's perturbations and integrator."""
 
     try:
-        return ReboundOrbit(kepler, t_end if kepler.dimensionless else t_end * U.TIME, perturbations=o["perturbations"], integrator=o["integrator"])
+        return ReboundOrbit(kepler, t_end if kepler.dimensionless else t_end * U.TIME,
+                            perturbations=o["perturbations"], integrator=o["integrator"])
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
 
