@@ -48,7 +48,7 @@ from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quanti
 from .sweep_schema import SweepSpec, parse_sweep_table
 from ..methods import METHODS
 
-__all__ = ["Spec", "parse", "TOP_KEYS", "TABLES", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
+__all__ = ["Spec", "parse", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
 
 TOP_KEYS = {"name", "description"}
 TABLES = {
@@ -59,6 +59,65 @@ TABLES = {
               "mean_anomaly", "epoch", "perturbations", "integrator", "tle", "tle_file"},
     "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
+}
+#: what each key of :data:`TABLES` is: ``(dimension, default, meaning)`` (``docs/scenarios.md``
+#: is generated from this table by :mod:`orbatt.scenario.reference`; a test keeps the two equal
+#: and every key described). "plain" dimensions are numbers without a unit; a quantity is a
+#: string astropy parses ("7000 km"), or a plain number in a scenario in normalized units.
+KEY_DOCS = {
+    "": {
+        "name": ("text", "the file name", "the scenario's name (Dataset title, `orbatt scenarios`)"),
+        "description": ("text", '""', "one line saying what the study is"),
+    },
+    "body": {
+        "inertia": ("mass x length^2, 3 values", "required", "principal moments [I1, I2, I3] about body axes 1, 2, "
+                    "3; plain numbers make the scenario dimensionless (normalized units)"),
+        "mass_g": ("force", "required for heavy-top", "weight M g of the heavy top"),
+        "center_of_mass": ("length, 3 values", "required for heavy-top", "centre of mass in body axes, relative to "
+                           "the fixed point"),
+    },
+    "initial": {
+        "q": ("plain, 4 values", "-", "attitude quaternion (q0 scalar first), body -> `frame` components; |q| = 1"),
+        "Q": ("momentum, 4 values", "-", "conjugate momentum Q = 2 q (0, I omega) (inertial frame only)"),
+        "omega": ("angular rate, 3 values", "-", "body angular velocity in body axes (relative to the orbital frame "
+                  "when frame = 'orbital')"),
+        "euler_313": ("angle, 3 values", "-", "3-1-3 Euler angles (phi, theta, psi) instead of q"),
+        "euler_momenta": ("momentum, 3 values", "-", "momenta conjugate to the 3-1-3 angles (inertial frame only)"),
+        "frame": ("'inertial' | 'orbital'", "'inertial'", "the frame q, euler_313 and omega are relative to"),
+    },
+    "potential": {
+        "kind": ("'torque-free' | 'heavy-top' | 'gravity-gradient'", "required", "the torque acting on the body"),
+        "sign": ("'physical' | 'paper'", "'physical'", "heavy top: U = M g z_c, or eq. (18) as printed (Fig. 2)"),
+    },
+    "orbit": {
+        "provider": ("'kepler' | 'rebound' | 'tle'", "'kepler'", "Keplerian elements, REBOUND integration, or SGP4 "
+                     "from a TLE"),
+        "central_body": ("'earth'", "'earth'", "the central body (its GM from astropy); or give gm"),
+        "gm": ("length^3 / time^2", "the Earth's", "central body's G M (a plain number in normalized units: gm = 1, "
+               "a = 1 make the mean motion 1)"),
+        "a": ("length", "required (not tle)", "semi-major axis (> 0; the unit of length in normalized units)"),
+        "e": ("plain", "required (not tle)", "eccentricity, 0 <= e < 1"),
+        "i": ("angle", "required (not tle)", "inclination to the s1-s2 plane of the inertial frame"),
+        "raan": ("angle", "required (not tle)", "right ascension of the ascending node"),
+        "argp": ("angle", "required (not tle)", "argument of periapsis"),
+        "true_anomaly": ("angle", "one of the two", "true anomaly at t = 0"),
+        "mean_anomaly": ("angle", "one of the two", "mean anomaly at t = 0"),
+        "epoch": ("ISO time (UTC)", "none; tle: the TLE's", "the instant t = 0 (CF time axis, third bodies)"),
+        "perturbations": ("list of 'j2' | 'moon' | 'sun'", "[]", "rebound: forces besides the central point mass"),
+        "integrator": ("'ias15' | 'whfast'", "'ias15'", "rebound: the REBOUND integrator"),
+        "tle": ("2 text lines", "one of tle, tle_file", "tle: the two-line element set"),
+        "tle_file": ("path", "one of tle, tle_file", "tle: a file with the two lines (a name line optional), "
+                     "relative to the scenario file"),
+    },
+    "integration": {
+        "method": ("text", "'dop853'", "the integration method (`orbatt methods` lists them)"),
+        "rtol": ("plain", "the method's", "relative tolerance (adaptive methods)"),
+        "atol": ("plain", "the method's", "absolute tolerance (adaptive methods)"),
+        "step": ("time or 'N orbits'", "required by fixed-step methods", "the fixed step"),
+        "t_end": ("time or 'N orbits'", "required", "the span; outputs at k * output_step <= t_end"),
+        "output_step": ("time or 'N orbits'", "required", "spacing of the output times"),
+    },
+    "sweep": {},  # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
 }
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
