@@ -79,7 +79,7 @@ def checks(name, sc, ds):
                 f"  max |G3 - G3(t0)|    = {np.abs(G3 - G3[0]).max():.1e}  (vertical momentum)"]
     else:
         ref = sc.run(method="scipy-DOP853")
-        out += [f"  orbital period {sc.orbit.period:.1f} s; r from {ds['r'].values.min():.1f} "
+        out += [f"  orbital period {sc.orbit.period_value:.1f} s; r from {ds['r'].values.min():.1f} "
                 f"to {ds['r'].values.max():.1f} km",
                 f"  vs scipy DOP853 (same tolerances): max |dq| = "
                 f"{np.abs(q - ref['q'].values).max():.1e}, max |dQ| = {np.abs(Q - ref['Q'].values).max():.1e}"]

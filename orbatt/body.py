@@ -49,6 +49,15 @@ def check_triangle(inertia):
                              "no rigid body has these principal moments")
 
 
+#: a body whose largest moment is at least this (kg m^2) prints its inertia in kg km^2
+REPR_KM2_FROM = 1e3
+
+
+def _numbers(values):
+    """``[12, 15, 18]``: a short list of numbers to 7 significant digits."""
+    return "[" + ", ".join(f"{float(v):.7g}" for v in values) + "]"
+
+
 class RigidBody:
     """A rigid body given by its principal moments of inertia ``(I1, I2, I3)``.
 
@@ -110,7 +119,14 @@ class RigidBody:
         return self._value * self.inertia_unit
 
     def __repr__(self):
-        return f"RigidBody(inertia={self.inertia})"
+        """``RigidBody(inertia=[12, 15, 18] kg m^2)``: kg m^2 below :data:`REPR_KM2_FROM`
+        (1e3 kg m^2), kg km^2 from there on; plain numbers for a dimensionless body."""
+        if self.dimensionless:
+            return f"RigidBody(inertia={_numbers(self._value)} (dimensionless))"
+        in_m2 = self._value * 1e6
+        if np.max(in_m2) < REPR_KM2_FROM:
+            return f"RigidBody(inertia={_numbers(in_m2)} kg m^2)"
+        return f"RigidBody(inertia={_numbers(self._value)} kg km^2)"
 
     def __eq__(self, other):
         return (isinstance(other, RigidBody) and self.dimensionless == other.dimensionless

@@ -97,7 +97,8 @@ def state_from_orbital(body, orbit, q_BO=(1.0, 0.0, 0.0, 0.0), omega_BO_B=(0.0, 
     Parameters
     ----------
     body : RigidBody
-        A dimensional body (inertia in kg km^2).
+        A dimensional body (inertia in kg km^2) with a dimensional orbit, or a dimensionless
+        one with a dimensionless orbit (normalized units; rates in its time unit).
     orbit : OrbitProvider
     q_BO : array-like (..., 4)
         Attitude of the body relative to the orbital frame (body -> ``O`` components, scalar
@@ -118,10 +119,10 @@ def state_from_orbital(body, orbit, q_BO=(1.0, 0.0, 0.0, 0.0), omega_BO_B=(0.0, 
     """
     if not isinstance(body, RigidBody):
         raise InputError(f"body: expected a RigidBody, got {type(body).__name__}")
-    if body.dimensionless:
-        raise InputError("body: orbital-frame states need a dimensional body (the orbit's time unit is the "
-                         "second); give the inertia as a Quantity, e.g. [400, 500, 600] * u.kg * u.km**2")
     _check_orbit(orbit)
+    if bool(body.dimensionless) != bool(getattr(orbit, "dimensionless", False)):
+        raise InputError("body: the body and the orbit must be both dimensional (inertia and a as Quantities) or "
+                         "both in normalized units (plain numbers)")
     t0v = as_times(t0, "t0")
     if t0v.shape != ():
         raise InputError(f"t0: expected one time, got shape {t0v.shape}")
@@ -137,7 +138,7 @@ def state_from_orbital(body, orbit, q_BO=(1.0, 0.0, 0.0, 0.0), omega_BO_B=(0.0, 
     p = orbit.orbital_quaternion(t0v)
     q = qt.mul(p, qbo)
     omega = body_rate_from_orbital(orbit, t0v, qbo, w)
-    return State.from_omega(body, q, omega * U.RATE)
+    return State.from_omega(body, q, omega if body.dimensionless else omega * U.RATE)
 
 
 def to_orbital(orbit, t, q, Q=None, inertia=None):

@@ -137,8 +137,10 @@ class GravityGradient(Potential):
     Parameters
     ----------
     orbit : OrbitProvider
-        The orbit (times in seconds since its epoch). Acts on dimensional bodies only
-        (inertia in kg km^2; energies in kg km^2 s^-2, torques in N km).
+        The orbit (times in seconds since its epoch). A dimensional orbit acts on
+        dimensional bodies (inertia in kg km^2; energies in kg km^2 s^-2, torques in N km),
+        a dimensionless one (plain ``a`` and ``gm``, normalized units) on dimensionless
+        bodies (plain numbers throughout).
 
     Attributes
     ----------
@@ -151,7 +153,6 @@ class GravityGradient(Potential):
     """
 
     name = "gravity-gradient"
-    dimensionless = False
     term_names = ["gravity_gradient"]
 
     def __init__(self, orbit):
@@ -166,10 +167,19 @@ class GravityGradient(Potential):
     def time_span(self):
         return self.orbit.time_span
 
+    @property
+    def dimensionless(self):
+        """Whether the orbit (and so the body it acts on) is in normalized units."""
+        return bool(self.orbit.dimensionless)
+
     def check_body(self, body):
-        if body.dimensionless:
-            raise InputError("body: the gravity-gradient potential needs a dimensional body (GM is in km^3/s^2); "
-                             "give the inertia as a Quantity, e.g. [400, 500, 600] * u.kg * u.km**2")
+        if body.dimensionless and not self.dimensionless:
+            raise InputError("body: plain-number inertia with a dimensional orbit (GM in km^3/s^2); give the inertia "
+                             "as a Quantity, e.g. [400, 500, 600] * u.kg * u.km**2, or the orbit's a and gm as plain "
+                             "numbers (normalized units)")
+        if self.dimensionless and not body.dimensionless:
+            raise InputError("body: dimensional inertia with a dimensionless orbit (plain a and gm); give the "
+                             "inertia as plain numbers too (normalized units), or a and gm as Quantities")
 
     def evaluate(self, body, t, q):
         """``(U, dU/dq, torque)`` at times ``t`` (s since the orbit's epoch) and attitudes
@@ -186,3 +196,6 @@ class GravityGradient(Potential):
 
     def describe(self):
         return {"kind": self.name, "orbit": self.orbit.describe()}
+
+    def __repr__(self):
+        return f"GravityGradient(orbit={self.orbit!r})"

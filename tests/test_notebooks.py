@@ -2,8 +2,10 @@
 checks), in fast mode (``ORBATT_NOTEBOOK_FAST=1``), on a kernel running this interpreter.
 
 Needs ``nbformat``, ``nbclient`` and ``ipykernel`` (in the ``test`` extra); skipped with the
-reason when they are missing. The notebooks are committed without outputs (checked without
-those packages).
+reason when they are missing. The notebooks are committed WITH their outputs, so that the
+figures show where the repository is browsed (checked without those packages); refresh them
+by executing each notebook in place with nbclient (full mode: ``ORBATT_NOTEBOOK_FAST`` unset),
+e.g. ``nbclient.NotebookClient(nb, timeout=1200).execute()`` then ``nbformat.write``.
 """
 from __future__ import annotations
 
@@ -28,11 +30,16 @@ def _path(name):
 
 
 @pytest.mark.parametrize("name", NOTEBOOKS)
-def test_notebook_committed_without_outputs(name):
+def test_notebook_committed_with_outputs(name):
     nb = json.loads(_path(name).read_text(encoding="utf-8"))
-    dirty = [i for i, c in enumerate(nb["cells"]) if c["cell_type"] == "code"
-             and (c.get("outputs") or c.get("execution_count") is not None)]
-    assert not dirty, f"{name}: code cells {dirty} have outputs; clear them before committing"
+    code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+    unrun = [i for i, c in enumerate(code) if c.get("execution_count") is None]
+    assert not unrun, f"{name}: code cells {unrun} were not executed; commit the notebook with its outputs"
+    counts = [c["execution_count"] for c in code]
+    assert counts == list(range(1, len(code) + 1)), f"{name}: executed out of order ({counts}); run it top to bottom"
+    outputs = [o for c in code for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"], f"{name}: committed with an error output"
+    assert any("image/png" in o.get("data", {}) for o in outputs), f"{name}: no figure among the outputs"
 
 
 def _kernel_manager(tmp_path):

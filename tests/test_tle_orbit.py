@@ -92,7 +92,7 @@ def test_epoch_defaults_to_the_tle_and_may_start_later(iss):
     t = np.linspace(0, 7200, 50)
     assert np.abs(later.state(t)[0] - iss.state(t + later.offset)[0]).max() < 5e-4  # two interpolants
     assert abs(later.offset - 3600.0) < 1e-3
-    assert abs(iss.period - 86400 / 15.50103472) < 1e-3
+    assert abs(iss.period_value - 86400 / 15.50103472) < 1e-3
 
 
 def test_plugs_into_the_gravity_gradient_kernel(iss):

@@ -27,6 +27,29 @@ class OrbattAccessor:
     def __init__(self, ds: xr.Dataset):
         self._ds = ds
 
+    def __repr__(self):
+        """What the Dataset holds, with units: title, unit system, outputs and span, the
+        epoch, the method, the orbit, the cases of an ensemble or sweep."""
+        ds, a = self._ds, self._ds.attrs
+        t = ds["time"].values
+        tu = ds["time"].attrs.get("units", "")
+        span = f"{t[0]:.6g} .. {t[-1]:.6g}" if t.size else "empty"
+        lines = [f"<orbatt Dataset: {a.get('title', 'orbatt result')}>",
+                 f"  units:   {a.get('unit_system', '?')}",
+                 f"  time:    {t.size} outputs, {span} {'(dimensionless)' if tu == '1' else 's'}"]
+        if self.epoch is not None:
+            lines.append(f"  epoch:   {a['epoch']} UTC")
+        lines.append(f"  method:  {a.get('method', '?')} {json.dumps(self.settings)}")
+        if "orbit" in a:
+            orb = json.loads(a["orbit"])
+            lines.append(f"  orbit:   {orb.get('type', '?')} about {orb.get('central_body', '?')}")
+        for dim in ("case", "ensemble"):
+            if dim in ds.dims:
+                lines.append(f"  {dim}s:   {ds.sizes[dim]}")
+        if not int(a.get("integration_complete", 1)):
+            lines.append("  INCOMPLETE: the integration stopped early")
+        return "\n".join(lines)
+
     # units ------------------------------------------------------------------------------
     def unit(self, name):
         """astropy unit of variable ``name`` (from its ``units`` attribute)."""
@@ -128,17 +151,19 @@ class OrbattAccessor:
         return write_aem(self._ds, path, **kwargs)
 
     # plots (orbatt.dataset.plots) --------------------------------------------------------
-    def plot_state(self, case=None, fig=None):
+    def plot_state(self, case=None, fig=None, time="auto"):
         """The paper's figure layout: ``q`` (left) and ``Q`` (right) against time
-        (:func:`orbatt.dataset.plots.plot_state`). Returns the matplotlib Figure."""
-        return plots.plot_state(self._ds, case=case, fig=fig)
+        (:func:`orbatt.dataset.plots.plot_state`; ``time``: ``"auto"``, ``"utc"``,
+        ``"orbits"`` or ``"time"``). Returns the matplotlib Figure."""
+        return plots.plot_state(self._ds, case=case, fig=fig, time=time)
 
-    def plot_attitude(self, case=None, unit="degree", fig=None):
-        """Euler angles against time (:func:`orbatt.dataset.plots.plot_attitude`). Returns the
-        Figure."""
-        return plots.plot_attitude(self._ds, case=case, unit=unit, fig=fig)
-
-    def plot_drift(self, case=None, fig=None):
-        """Energy and constraint drift on log axes (:func:`orbatt.dataset.plots.plot_drift`).
+    def plot_attitude(self, case=None, unit="degree", fig=None, time="auto"):
+        """Unwrapped Euler angles against time (:func:`orbatt.dataset.plots.plot_attitude`).
         Returns the Figure."""
-        return plots.plot_drift(self._ds, case=case, fig=fig)
+        return plots.plot_attitude(self._ds, case=case, unit=unit, fig=fig, time=time)
+
+    def plot_drift(self, case=None, fig=None, time="auto"):
+        """Drift of the energy, or of the Jacobi integral, or the energy change where nothing
+        is conserved, and of the constraints, on log axes
+        (:func:`orbatt.dataset.plots.plot_drift`). Returns the Figure."""
+        return plots.plot_drift(self._ds, case=case, fig=fig, time=time)

@@ -304,12 +304,12 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
         coords["euler_321_label"] = xr.Variable(("euler_321_angle",), np.array(EULER_321_LABELS),
                                                 {"long_name": "3-2-1 Euler angle name"})
         data.update({
-            "r": cf_variable(("time",), r, "km", "orbit radius"),
+            "r": cf_variable(("time",), r, U["length"], "orbit radius"),
             "p": cf_variable(("time", "quat"), p, "1", "orbital quaternion",
                       **_quat_attrs("O relative to S", "x_S = p x_O p~ (maps orbital to space components)")),
             "true_anomaly": cf_variable(("time",), nu, "rad", "true anomaly"),
-            "position": cf_variable(("time", "axis"), pos, "km", "position of the body's centre of mass", frame="S"),
-            "velocity": cf_variable(("time", "axis"), vel, "km s^-1", "velocity of the body's centre of mass", frame="S"),
+            "position": cf_variable(("time", "axis"), pos, U["length"], "position of the body's centre of mass", frame="S"),
+            "velocity": cf_variable(("time", "axis"), vel, U["speed"], "velocity of the body's centre of mass", frame="S"),
             "q_orbital": cf_variable(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
                               **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
             "euler_321": cf_variable(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",

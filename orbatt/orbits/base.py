@@ -65,8 +65,9 @@ class OrbitProvider:
     ----------
     gm : float
         Central body's mass parameter (km^3 s^-2).
-    period : float
-        Orbital period (s) (Keplerian; of the initial osculating orbit for REBOUND).
+    period : Quantity
+        Orbital period (s) (Keplerian; of the initial osculating orbit for REBOUND); the
+        float is ``period_value``.
     epoch : astropy.time.Time or None
         The instant ``t = 0``.
     central_body : str
@@ -77,11 +78,27 @@ class OrbitProvider:
     """
 
     gm: float
-    period: float
+    #: orbital period as a float in the orbit's time unit (s; normalized units for a
+    #: dimensionless orbit); :attr:`period` is the same as a Quantity
+    period_value: float
+    #: True for an orbit in normalized units (plain numbers: lengths in the unit of ``a``,
+    #: times in the unit ``gm`` implies); it acts only on dimensionless bodies
+    dimensionless = False
     epoch = None
     central_body = "earth"
     name = "orbit"
     time_span = None
+
+    @property
+    def time_unit(self):
+        """The unit of the orbit's times: ``s``, or dimensionless in normalized units."""
+        return U.DIMENSIONLESS if self.dimensionless else U.TIME
+
+    @property
+    def period(self):
+        """Orbital period as a Quantity (s, or dimensionless in normalized units); the float
+        is :attr:`period_value`."""
+        return self.period_value * self.time_unit
 
     # ---- contract (subclasses implement state(), kernel(), describe()) ------------------
     def state(self, t):  # pragma: no cover - abstract
@@ -226,15 +243,23 @@ def _orbital_rate(pos, vel, acc):
     return np.stack([r * an / hn, np.zeros_like(r), hn / r**2], axis=-1)
 
 
-def resolve_gm(gm, central_body):
+def resolve_gm(gm, central_body, dimensionless=False):
     """``(gm km^3/s^2, central_body)`` from the constructor arguments: ``gm=None`` means the
-    Earth (astropy ``GM_earth``)."""
+    Earth (astropy ``GM_earth``). A ``dimensionless`` orbit needs ``gm`` as a plain number
+    (normalized units); a dimensional one needs a Quantity."""
+    if dimensionless:
+        if gm is None or isinstance(gm, (u.Quantity, str)):
+            raise InputError(f"gm: {gm!r} with a plain-number a; a dimensionless orbit needs gm as a plain number "
+                             "too (gm=1.0, a=1.0 make the mean motion 1), or give a as a Quantity")
+    elif gm is not None and not isinstance(gm, (u.Quantity, str)):
+        raise InputError(f"gm: {gm!r} has no unit but a is dimensional; give gm as a Quantity such as "
+                         "'398600.4418 km3 / s2', or give a as a plain number too (normalized units)")
     if gm is None:
         if central_body not in (None, "earth"):
             raise InputError(f"central_body: {central_body!r} is not known; give gm (e.g. "
                              "'4902.8 km3 / s2') for a body other than 'earth'")
         return float(GM_EARTH), "earth"
-    value = U.strip(gm, U.GM, "gm")
+    value = U.strip(gm, U.GM, "gm", allow_plain=dimensionless)
     if value.shape != ():
         raise InputError(f"gm: expected one mass parameter, got {gm!r}")
     value = float(value)

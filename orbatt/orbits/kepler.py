@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from astropy import units as u
 
 from .. import units as U
 from ..core import kepler as kk
@@ -37,8 +38,11 @@ class KeplerOrbit(OrbitProvider):
 
     Parameters
     ----------
-    a : Quantity (length) or str
-        Semi-major axis, ``> 0``.
+    a : Quantity (length), str, or float
+        Semi-major axis, ``> 0``. A plain number makes a *dimensionless* orbit (normalized
+        units, as in the spin-orbit literature): ``gm`` must then be a plain number too,
+        lengths are in the unit of ``a`` and times in the unit ``gm`` implies (``gm = 1,
+        a = 1`` make the mean motion 1); it acts on dimensionless bodies only.
     e : float or dimensionless Quantity
         Eccentricity, ``0 <= e < 1``. Parabolic and hyperbolic orbits (``e >= 1``) are
         refused with :class:`~orbatt.errors.InputError`.
@@ -48,8 +52,9 @@ class KeplerOrbit(OrbitProvider):
         plane is the reference plane, ``s1`` the reference direction).
     true_anomaly, mean_anomaly, eccentric_anomaly : Quantity (angle), str or float (rad)
         The anomaly at the epoch (``t = 0``): give at most one; default true anomaly 0.
-    gm : Quantity (km^3/s^2) or str, optional
-        The central body's ``G M``. Default: the Earth (astropy ``GM_earth``).
+    gm : Quantity (km^3/s^2), str, or float, optional
+        The central body's ``G M``. Default: the Earth (astropy ``GM_earth``). A plain
+        number with a plain ``a`` (required then).
     central_body : str, optional
         Name recorded in :meth:`describe`: ``"earth"`` (default when ``gm`` is not given)
         or any label (default ``"custom"`` with ``gm``).
@@ -75,15 +80,19 @@ class KeplerOrbit(OrbitProvider):
     >>> import astropy.units as u
     >>> orbit = KeplerOrbit(7000 * u.km, 0.2, 30 * u.deg, 45 * u.deg, 15 * u.deg,
     ...                     true_anomaly=0 * u.deg, body_radius=None)
-    >>> round(orbit.period, 1)
-    5828.5
+    >>> orbit.period.round(1)
+    <Quantity 5828.5 s>
     """
 
     name = "kepler"
 
     def __init__(self, a, e, i, raan, argp, *, true_anomaly=None, mean_anomaly=None, eccentric_anomaly=None,
                  gm=None, central_body=None, epoch=None, body_radius="default"):
-        av = U.strip(a, U.LENGTH, "a")
+        dimless = not isinstance(a, (u.Quantity, str))
+        if dimless and gm is None:
+            raise InputError(f"a: {a!r} has no unit; give a Quantity such as '{a} km', or give gm as a plain number "
+                             "too (normalized units: gm=1.0, a=1.0 make the mean motion 1)")
+        av = U.strip(a, U.LENGTH, "a", allow_plain=dimless)
         if av.shape != ():
             raise InputError(f"a: expected one semi-major axis, got {a!r}")
         av = float(av)
@@ -103,7 +112,11 @@ class KeplerOrbit(OrbitProvider):
         if not 0.0 <= inc <= math.pi:
             raise InputError(f"i: {i!r} is outside [0, 180] deg; give the inclination in that range "
                              "(a retrograde orbit has i > 90 deg)")
-        self.gm, self.central_body = resolve_gm(gm, central_body)
+        self.dimensionless = dimless
+        self.gm, self.central_body = resolve_gm(gm, central_body, dimless)
+        if dimless and epoch is not None:
+            raise InputError(f"epoch: {epoch!r} given for a dimensionless orbit (plain a and gm), whose time unit "
+                             "is not the second; leave the epoch out or give a and gm as Quantities")
         given = [(k, v) for k, v in (("true_anomaly", true_anomaly), ("mean_anomaly", mean_anomaly),
                                      ("eccentric_anomaly", eccentric_anomaly)) if v is not None]
         if len(given) > 1:
@@ -117,26 +130,55 @@ class KeplerOrbit(OrbitProvider):
             M0 = _mean_from_eccentric(anom, ev)
         else:
             M0 = anom
-        self.a = av
+        self.a_value = av
+        self._a_unit = a.unit if isinstance(a, u.Quantity) else (u.Quantity(a).unit if isinstance(a, str) else None)
         self.e = ev
         self.inc = inc
         self.raan = _angle(raan, "raan")
         self.argp = _angle(argp, "argp")
         self.M0 = M0
-        self.n = math.sqrt(self.gm / av**3)
-        self.period = 2.0 * math.pi / self.n
+        self.n_value = math.sqrt(self.gm / av**3)
+        self.period_value = 2.0 * math.pi / self.n_value
         self.epoch = parse_epoch(epoch)
         if isinstance(body_radius, str) and body_radius == "default":
             self.body_radius = R_EARTH if self.central_body == "earth" else None
         elif body_radius is None:
             self.body_radius = None
         else:
-            br = U.strip(body_radius, U.LENGTH, "body_radius")
+            br = U.strip(body_radius, U.LENGTH, "body_radius", allow_plain=dimless)
             if br.shape != () or not br > 0:
                 raise InputError(f"body_radius: {body_radius!r} must be one positive length, or None")
             self.body_radius = float(br)
         check_periapsis(av, ev, self.body_radius, self.central_body)
-        self._orb = kk.orbit_vector(av, ev, inc, self.raan, self.argp, M0, self.n)
+        self._orb = kk.orbit_vector(av, ev, inc, self.raan, self.argp, M0, self.n_value)
+
+    # ---- in the user's units ----------------------------------------------------------
+    @property
+    def a(self):
+        """Semi-major axis as a Quantity, in the unit it was given in (km for a string such
+        as ``"7000 km"``; dimensionless in normalized units); the float in km is ``a_value``."""
+        if self.dimensionless:
+            return self.a_value * U.DIMENSIONLESS
+        q = self.a_value * U.LENGTH
+        return q.to(self._a_unit) if self._a_unit is not None else q
+
+    @property
+    def n(self):
+        """Mean motion ``sqrt(GM / a^3)`` as a Quantity (rad/s; dimensionless in normalized
+        units); the float is ``n_value``."""
+        return self.n_value * (U.DIMENSIONLESS if self.dimensionless else U.RATE)
+
+    def __repr__(self):
+        if self.dimensionless:
+            head = f"a={self.a_value:.10g}, gm={self.gm:.10g} (normalized units)"
+            tail = f"period={self.period_value:.10g}"
+        else:
+            head = f"a={self.a:.10g}, central_body={self.central_body!r}, gm={self.gm:.10g} km^3 / s^2"
+            tail = f"period={self.period_value:.10g} s"
+        deg = 180.0 / math.pi
+        ep = f", epoch={epoch_string(self.epoch)}" if self.epoch is not None else ""
+        return (f"KeplerOrbit({head}, e={self.e:.10g}, i={self.inc * deg:.10g} deg, raan={self.raan * deg:.10g} deg, "
+                f"argp={self.argp * deg:.10g} deg, mean_anomaly={self.M0 * deg:.10g} deg, {tail}{ep})")
 
     # ---- alternative constructor ------------------------------------------------------
     @classmethod
@@ -146,7 +188,8 @@ class KeplerOrbit(OrbitProvider):
         Parameters
         ----------
         position : Quantity (length), shape (3,)
-            Position relative to the central body in ``S`` components.
+            Position relative to the central body in ``S`` components (3 plain numbers: a
+            dimensionless orbit, then ``velocity`` and ``gm`` plain too).
         velocity : Quantity (speed), shape (3,)
             Velocity in ``S`` components.
         gm, central_body, epoch, body_radius
@@ -164,11 +207,12 @@ class KeplerOrbit(OrbitProvider):
         ``raan = 0`` for an equatorial orbit, ``argp = 0`` for a circular one; the state is
         reproduced whatever the convention.
         """
-        r = U.strip(position, U.LENGTH, "position")
-        v = U.strip(velocity, U.LENGTH / U.TIME, "velocity")
+        dimless = not isinstance(position, (u.Quantity, str))
+        r = U.strip(position, U.LENGTH, "position", allow_plain=dimless)
+        v = U.strip(velocity, U.LENGTH / U.TIME, "velocity", allow_plain=dimless)
         if r.shape != (3,) or v.shape != (3,):
             raise InputError(f"position/velocity: expected 3 components each, got shapes {r.shape}, {v.shape}")
-        gmv, _ = resolve_gm(gm, central_body)
+        gmv, _ = resolve_gm(gm, central_body, dimless)
         if np.linalg.norm(np.cross(r, v)) <= 1e-14 * np.linalg.norm(r) * max(np.linalg.norm(v), 1e-300):
             raise InputError(f"position/velocity: {r.tolist()} km, {v.tolist()} km/s is a rectilinear "
                              "(radial) motion with no orbit plane; give a state with angular momentum")
@@ -176,8 +220,9 @@ class KeplerOrbit(OrbitProvider):
         if not (el["a"] > 0 and el["e"] < 1.0):
             raise InputError(f"position/velocity: the state has e = {float(el['e']):.6g} (specific energy >= 0): "
                              "a parabolic or hyperbolic orbit is not supported; give an elliptic state")
-        return cls(float(el["a"]) * U.LENGTH, float(el["e"]), float(el["inc"]), float(el["raan"]),
-                   float(el["argp"]), true_anomaly=float(el["f"]), gm=gmv * U.GM if gm is not None else None,
+        lu, gu = (1.0, 1.0) if dimless else (U.LENGTH, U.GM)
+        return cls(float(el["a"]) * lu, float(el["e"]), float(el["inc"]), float(el["raan"]),
+                   float(el["argp"]), true_anomaly=float(el["f"]), gm=gmv * gu if gm is not None else None,
                    central_body=central_body, epoch=epoch, body_radius=body_radius)
 
     # ---- evaluation -------------------------------------------------------------------
@@ -190,7 +235,7 @@ class KeplerOrbit(OrbitProvider):
     def mean_anomaly(self, t):
         """Mean anomaly ``M0 + n t`` (rad, not wrapped); shape ``t.shape``."""
         t = as_times(t)
-        return self.M0 + self.n * t
+        return self.M0 + self.n_value * t
 
     def eccentric_anomaly(self, t):
         """Eccentric anomaly (rad, on the revolution of the mean anomaly)."""
@@ -232,7 +277,7 @@ class KeplerOrbit(OrbitProvider):
         """Angular velocity of ``O`` relative to ``S`` in ``O`` components (rad/s):
         ``(0, 0, df/dt)`` with ``df/dt = h / r^2``."""
         r = self.radius(t)
-        h = math.sqrt(self.gm * self.a * (1.0 - self.e) * (1.0 + self.e))
+        h = math.sqrt(self.gm * self.a_value * (1.0 - self.e) * (1.0 + self.e))
         z = np.zeros_like(r)
         return np.stack([z, z, h / r**2], axis=-1)
 
@@ -251,16 +296,21 @@ class KeplerOrbit(OrbitProvider):
     def elements(self):
         """``dict`` of the elements at the epoch: ``a`` (km), ``e``, ``i``, ``raan``,
         ``argp``, ``mean_anomaly``, ``true_anomaly`` (rad)."""
-        return {"a": self.a, "e": self.e, "i": self.inc, "raan": self.raan, "argp": self.argp,
+        return {"a": self.a_value, "e": self.e, "i": self.inc, "raan": self.raan, "argp": self.argp,
                 "mean_anomaly": self.M0, "true_anomaly": float(self.true_anomaly(0.0))}
 
     def describe(self):
         """Plain description: ``type``, ``central_body``, ``gm_km3_s2``, ``a_km``, ``e``,
         ``i_rad``, ``raan_rad``, ``argp_rad``, ``mean_anomaly_rad`` (at the epoch),
-        ``period_s``, and ``epoch`` (ISO UTC) when there is one."""
-        d = {"type": "kepler", "central_body": self.central_body, "gm_km3_s2": self.gm, "a_km": self.a,
-             "e": self.e, "i_rad": self.inc, "raan_rad": self.raan, "argp_rad": self.argp,
-             "mean_anomaly_rad": self.M0, "period_s": self.period}
+        ``period_s``, and ``epoch`` (ISO UTC) when there is one; a dimensionless orbit has
+        ``units = "normalized"`` and ``gm``, ``a``, ``period`` in its units instead."""
+        if self.dimensionless:  # normalized units: the keys carry no unit
+            d = {"type": "kepler", "units": "normalized", "central_body": self.central_body, "gm": self.gm,
+                 "a": self.a_value}
+        else:
+            d = {"type": "kepler", "central_body": self.central_body, "gm_km3_s2": self.gm, "a_km": self.a_value}
+        d.update({"e": self.e, "i_rad": self.inc, "raan_rad": self.raan, "argp_rad": self.argp,
+                  "mean_anomaly_rad": self.M0, ("period" if self.dimensionless else "period_s"): self.period_value})
         if self.epoch is not None:
             d["epoch"] = epoch_string(self.epoch)
         return d

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 from astropy import constants as const
+from astropy import units as u
 
 from .. import units as U
 from ..core import sampled as ks
@@ -39,8 +40,10 @@ class ReboundOrbit(SampledOrbit):
     ----------
     initial : KeplerOrbit
         The osculating orbit at the epoch (``t = 0``): its state vector starts the
-        integration; its ``gm``, ``central_body``, ``epoch`` are used.
-    t_end : Quantity (time) or str
+        integration; its ``gm``, ``central_body``, ``epoch`` are used. A dimensionless
+        orbit (plain ``a`` and ``gm``) makes a dimensionless REBOUND orbit: ``t_end``,
+        ``dt`` and ``reference_radius`` are then plain numbers in its units.
+    t_end : Quantity (time), str, or float (dimensionless orbit)
         End of the sampled span (``> 0``); the orbit is available for ``0 <= t <= t_end``
         (the last sample may lie slightly beyond). Times outside raise.
     perturbations : sequence of str, optional
@@ -112,8 +115,9 @@ class ReboundOrbit(SampledOrbit):
         self.gm = initial.gm
         self.central_body = initial.central_body
         self.epoch = initial.epoch
-        self.period = initial.period
-        te = U.strip(t_end, U.TIME, "t_end")
+        self.period_value = initial.period_value
+        self.dimensionless = dimless = initial.dimensionless
+        te = U.strip(t_end, U.TIME, "t_end", allow_plain=dimless)
         if te.shape != () or not te > 0:
             raise InputError(f"t_end: {t_end!r} must be one positive time, e.g. '1 d'")
         self.t_end = float(te)
@@ -147,13 +151,15 @@ class ReboundOrbit(SampledOrbit):
             if self.central_body == "earth":
                 self.j2 = J2_EARTH if j2 is None else float(U.strip(j2, U.DIMENSIONLESS, "j2"))
                 self.reference_radius = (R_J2_EARTH if reference_radius is None
-                                         else float(U.strip(reference_radius, U.LENGTH, "reference_radius")))
+                                         else float(U.strip(reference_radius, U.LENGTH, "reference_radius",
+                                                                allow_plain=dimless)))
             else:
                 if j2 is None or reference_radius is None:
                     raise InputError(f"j2: the J2 perturbation about {self.central_body!r} needs j2=... and "
                                      "reference_radius=... (only the Earth's are built in)")
                 self.j2 = float(U.strip(j2, U.DIMENSIONLESS, "j2"))
-                self.reference_radius = float(U.strip(reference_radius, U.LENGTH, "reference_radius"))
+                self.reference_radius = float(U.strip(reference_radius, U.LENGTH, "reference_radius",
+                                                      allow_plain=dimless))
             if not self.reference_radius > 0:
                 raise InputError(f"reference_radius: {reference_radius!r} must be positive")
         self.epsilon = None
@@ -168,7 +174,7 @@ class ReboundOrbit(SampledOrbit):
         else:
             if epsilon is not None:
                 raise InputError("epsilon: only used by integrator='ias15'; remove it or give dt for WHFast")
-            self.dt = self.period / n if dt is None else float(U.strip(dt, U.TIME, "dt"))
+            self.dt = self.period_value / n if dt is None else float(U.strip(dt, U.TIME, "dt", allow_plain=dimless))
             if not self.dt > 0:
                 raise InputError(f"dt: {dt!r} must be a positive time")
         table = self._integrate()
@@ -185,6 +191,90 @@ class ReboundOrbit(SampledOrbit):
                               eccentric_anomaly=eccentric_anomaly, gm=gm, central_body=central_body,
                               epoch=epoch, body_radius=body_radius)
         return cls(initial, t_end, **options)
+
+    @classmethod
+    def from_simulation(cls, sim, *, t_end, particle=1, central=0, units=None, epoch=None, samples_per_orbit=128):
+        """Sample a REBOUND simulation the user built: the ``particle``'s motion relative to
+        the ``central`` one, with everything in the simulation (its integrator, its other
+        particles, any REBOUNDx forces attached to it).
+
+        Parameters
+        ----------
+        sim : rebound.Simulation
+            Advanced in place from its current time ``sim.t`` (orbatt's ``t = 0``) to
+            ``sim.t + t_end``; pass ``sim.copy()`` to keep the original.
+        t_end : Quantity (time), or float in the simulation's time unit
+            Span to sample (``> 0``).
+        particle, central : int or str
+            Index (or hash name) of the satellite and of the central body whose ``G m`` is
+            the gravity gradient's ``GM``.
+        units : tuple (length, time), dict, or ``"normalized"``, optional
+            The simulation's length and time units, e.g. ``("au", "yr2pi")`` or ``("km",
+            "s")`` (astropy names; REBOUND's ``yr2pi`` is a year over 2 pi). Default: read from
+            ``sim.units`` (set by ``sim.units = ("au", "yr", "msun")``); refused when neither
+            says. ``"normalized"`` makes a dimensionless orbit (plain numbers as they are).
+        epoch : astropy.time.Time or str, optional
+            The instant ``t = 0`` (dimensional orbits only).
+        samples_per_orbit : int
+            Sample density, as for :class:`ReboundOrbit` (IAS15: adaptive to the radius;
+            other integrators: every ``round(period / N / sim.dt)`` steps).
+
+        Returns
+        -------
+        ReboundOrbit
+            ``initial`` is the osculating orbit at ``t = 0``; ``perturbations`` is
+            ``("simulation",)``; the samples are in km, s (or plain numbers).
+        """
+        import rebound
+        from rebound import clibrebound
+
+        if not isinstance(sim, rebound.Simulation):
+            raise InputError(f"sim: expected a rebound.Simulation, got {type(sim).__name__}")
+        length, time = _simulation_units(sim, units)
+        normalized = length is None
+        try:
+            pc, pp = sim.particles[central], sim.particles[particle]
+        except (IndexError, KeyError, TypeError, ValueError, AttributeError):
+            raise InputError(f"particle/central: {particle!r}/{central!r} are not particles of this simulation "
+                             f"({sim.N} particles)") from None
+        ic, ip = pc.index, pp.index
+        if ic == ip:
+            raise InputError(f"particle: {particle!r} is the central body too; choose another particle")
+        gm_sim = sim.G * pc.m
+        if not gm_sim > 0:
+            raise InputError(f"central: particle {central!r} has G m = {gm_sim!r}; the central body needs a mass")
+        Lk = 1.0 if normalized else float((1.0 * length).to_value(U.LENGTH))
+        Ts = 1.0 if normalized else float((1.0 * time).to_value(U.TIME))
+        r = np.array(pp.xyz) - np.array(pc.xyz)
+        v = np.array(pp.vxyz) - np.array(pc.vxyz)
+        gm = gm_sim * Lk**3 / Ts**2
+        if normalized:
+            initial = KeplerOrbit.from_state(r, v, gm=gm, body_radius=None)
+            te = U.strip(t_end, U.TIME, "t_end", allow_plain=True)
+        else:
+            initial = KeplerOrbit.from_state(r * Lk * U.LENGTH, v * Lk / Ts * U.LENGTH / U.TIME, gm=gm * U.GM,
+                                             epoch=epoch, body_radius=None)
+            te = (U.strip(t_end, U.TIME, "t_end") if isinstance(t_end, (str, u.Quantity))
+                  else np.asarray(float(t_end) * Ts))
+        if te.shape != () or not te > 0:
+            raise InputError(f"t_end: {t_end!r} must be one positive time")
+        n = int(samples_per_orbit) if np.ndim(samples_per_orbit) == 0 else -1
+        if n != samples_per_orbit or n < 8:
+            raise InputError(f"samples_per_orbit: {samples_per_orbit!r} must be an integer >= 8 (default 128)")
+        self = cls.__new__(cls)
+        self.initial, self.gm, self.central_body = initial, initial.gm, "custom"
+        self.epoch, self.period_value, self.dimensionless = initial.epoch, initial.period_value, normalized
+        self.t_end, self.samples_per_orbit, self.perturbations = float(te), n, ("simulation",)
+        self.integrator = str(sim.integrator)
+        self.j2 = self.reference_radius = None
+        self.epsilon = None
+        self.dt = None if self.integrator == "ias15" else float(sim.dt) * Ts
+        table = self._sample(sim, clibrebound, (ip, ic), gm_sim, self.t_end / Ts, self.period_value / Ts)
+        scale = np.array([Ts] + [Lk] * 3 + [Lk / Ts] * 3 + [Lk / Ts**2] * 3)
+        table = np.ascontiguousarray(table * scale)
+        table.flags.writeable = False
+        self._table = table
+        return self
 
     # ---- integration ------------------------------------------------------------------
     def _third_bodies(self):
@@ -230,14 +320,18 @@ class ReboundOrbit(SampledOrbit):
         else:
             sim.dt = self.dt
         try:
-            table = self._sample(sim, clibrebound)
+            table = self._sample(sim, clibrebound, (1, 0), self.gm, self.t_end, self.period_value)
         finally:
             if rebx is not None:
                 del rebx
             del sim
         return table
 
-    def _sample(self, sim, clib):
+    def _sample(self, sim, clib, pair, gm, t_end, period):
+        """Sample particle ``pair[0]`` relative to ``pair[1]`` over ``[sim.t, sim.t + t_end]``
+        (the simulation's units; ``gm`` and ``period`` in them): rows ``t - t0, x, v, a``."""
+        ip, ic = pair
+        t0 = sim.t
         size = ctypes.sizeof(type(sim._particles.contents))
         stride = size // 8
         nbody = sim.N
@@ -258,23 +352,22 @@ class ReboundOrbit(SampledOrbit):
             sim.gravity_ignore = ignore
             v = view()
             row = np.empty(ks.TABLE_COLUMNS)
-            row[0] = sim.t
-            row[1:] = v[1, :9] - v[0, :9]  # x, y, z, vx, vy, vz, ax, ay, az relative to the centre
+            row[0] = sim.t - t0
+            row[1:] = v[ip, :9] - v[ic, :9]  # x, y, z, vx, vy, vz, ax, ay, az relative to the centre
             rows.append(row)
             return row
 
         rows = []
         row = record(rows)
         c = 2.0 * math.pi / self.samples_per_orbit
-        t_end = self.t_end
         if self.integrator == "ias15":
             t = 0.0
             while t < t_end:
                 r = math.sqrt(row[1] ** 2 + row[2] ** 2 + row[3] ** 2)
                 rdot = (row[1] * row[4] + row[2] * row[5] + row[3] * row[6]) / r
-                h = c * math.sqrt(r**3 / self.gm)
+                h = c * math.sqrt(r**3 / gm)
                 rm = max(r + 0.5 * rdot * h, 0.5 * r)  # radius predicted at mid-interval
-                h = c * math.sqrt(rm**3 / self.gm)
+                h = c * math.sqrt(rm**3 / gm)
                 left = t_end - t
                 if left <= h:
                     t_next = t_end
@@ -282,12 +375,12 @@ class ReboundOrbit(SampledOrbit):
                     t_next = t + 0.5 * left
                 else:
                     t_next = t + h
-                sim.integrate(t_next, exact_finish_time=1)
-                t = sim.t
+                sim.integrate(t0 + t_next, exact_finish_time=1)
+                t = sim.t - t0
                 row = record(rows)
         else:
-            k = max(1, int(round(self.period / self.samples_per_orbit / self.dt)))
-            while sim.t < t_end:
+            k = max(1, int(round(period / self.samples_per_orbit / sim.dt)))
+            while sim.t - t0 < t_end:
                 sim.steps(k)
                 row = record(rows)
         return np.ascontiguousarray(np.array(rows))
@@ -302,20 +395,49 @@ class ReboundOrbit(SampledOrbit):
         d = self.initial.describe()
         d["type"] = "rebound"
         d.update({"perturbations": list(self.perturbations), "integrator": self.integrator,
-                  "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
+                  ("t_end" if self.dimensionless else "t_end_s"): self.t_end, "samples_per_orbit": self.samples_per_orbit,
                   "n_samples": int(self._table.shape[0]), "rebound_version": rebound.__version__})
         if self.integrator == "ias15":
             d["epsilon"] = self.epsilon if self.epsilon is not None else 1e-9
         else:
-            d["dt_s"] = self.dt
+            d["dt" if self.dimensionless else "dt_s"] = self.dt
         if self.j2 is not None:
             import reboundx
 
-            d.update({"j2": self.j2, "reference_radius_km": self.reference_radius,
+            d.update({"j2": self.j2, ("reference_radius" if self.dimensionless else "reference_radius_km"):
+                      self.reference_radius,
                       "reboundx_version": reboundx.__version__})
         if self.epoch is not None:
             d["epoch"] = epoch_string(self.epoch)
         return d
+
+
+#: REBOUND time unit names astropy does not know
+_REBOUND_TIMES = {"yr2pi": u.yr / (2.0 * math.pi)}
+
+
+def _simulation_units(sim, units):
+    """``(length, time)`` astropy units of a REBOUND simulation, from ``units`` or else
+    ``sim.units``; ``(None, None)`` for ``units="normalized"``."""
+    if isinstance(units, str) and units == "normalized":
+        return None, None
+    if units is None:
+        su = sim.units
+        if not su.get("length") or not su.get("time"):
+            raise InputError("units: the simulation's units are not set (sim.units); give units=('km', 's'), "
+                             "units=('au', 'yr2pi') ... or units='normalized', or set sim.units first")
+        units = (su["length"], su["time"])
+    if isinstance(units, dict):
+        units = (units.get("length"), units.get("time"))
+    try:
+        length, time = units
+        length = u.Unit(length)
+        time = _REBOUND_TIMES.get(str(time).lower()) or u.Unit(time)
+    except (TypeError, ValueError):
+        raise InputError(f"units: {units!r} is not (length, time), e.g. ('km', 's') or ('au', 'yr2pi')") from None
+    if length.physical_type != "length" or time.physical_type != "time":
+        raise InputError(f"units: {units!r} is not (length, time), e.g. ('km', 's') or ('au', 'yr2pi')")
+    return length, time
 
 
 __all__ = ["ReboundOrbit", "J2_EARTH", "R_J2_EARTH", "GM_MOON", "GM_SUN", "GM_EARTH"]

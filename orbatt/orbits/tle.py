@@ -148,7 +148,7 @@ class TleOrbit(SampledOrbit):
         self.gm = GM_EARTH
         self.central_body = "earth"
         self.n_mean = sat.no_kozai / 60.0  # rad/s
-        self.period = 2.0 * math.pi / self.n_mean
+        self.period_value = 2.0 * math.pi / self.n_mean
         te = U.strip(t_end, U.TIME, "t_end")
         if te.shape != () or not te > 0:
             raise InputError(f"t_end: {t_end!r} must be one positive time, e.g. '1 d'")
@@ -228,6 +228,6 @@ class TleOrbit(SampledOrbit):
 
         return {"type": "tle", "name": self.title, "line1": self.line1, "line2": self.line2,
                 "tle_epoch": epoch_string(self.tle_epoch), "epoch": epoch_string(self.epoch),
-                "period_s": self.period, "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
+                "period_s": self.period_value, "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
                 "n_samples": int(self._table.shape[0]), "frame": "GCRS", "central_body": "earth",
                 "sgp4_version": sgp4.__version__}

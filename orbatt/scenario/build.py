@@ -42,18 +42,20 @@ MAX_ANGLE_PER_STEP = math.pi
 
 def build_kepler_orbit(ctx, o):
     """The :class:`~orbatt.orbits.KeplerOrbit` of a validated ``[orbit]`` table ``o``
-    (internal units: km, rad; ``gm`` in km^3 s^-2). For ``provider = "rebound"`` it is the
+    (internal units: km, rad; ``gm`` in km^3 s^-2; plain numbers in normalized units). For ``provider = "rebound"`` it is the
     initial osculating orbit (and gives the period for ``"N orbits"``)."""
 
+    plain = o.get("dimensionless", False)  # normalized units: a and gm as plain numbers
+    lu, gu = (1.0, 1.0) if plain else (U.LENGTH, U.GM)
     kw = {o["anomaly_kind"]: o["anomaly"] * U.ANGLE}
     if o["central_body"] is None:
-        kw["gm"] = o["gm"] * U.GM
+        kw["gm"] = o["gm"] * gu
     else:
         kw["central_body"] = o["central_body"]
     if o["epoch"] is not None:
         kw["epoch"] = o["epoch"]
     try:  # a periapsis inside the central body warns (PeriapsisWarning), as the paper's Sect. 6.2 orbit does
-        return KeplerOrbit(o["a"] * U.LENGTH, o["e"], o["i"] * U.ANGLE, o["raan"] * U.ANGLE,
+        return KeplerOrbit(o["a"] * lu, o["e"], o["i"] * U.ANGLE, o["raan"] * U.ANGLE,
                            o["argp"] * U.ANGLE, **kw)
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
@@ -64,7 +66,8 @@ def build_rebound_orbit(ctx, o, kepler, t_end):
     orbit) over ``[0, t_end]`` (s), with the table's perturbations and integrator."""
 
     try:
-        return ReboundOrbit(kepler, t_end * U.TIME, perturbations=o["perturbations"], integrator=o["integrator"])
+        return ReboundOrbit(kepler, t_end if kepler.dimensionless else t_end * U.TIME,
+                            perturbations=o["perturbations"], integrator=o["integrator"])
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
 
@@ -162,7 +165,7 @@ def build_initial_state(ctx, spec, body, orbit):
 
             if "Q" in ini:
                 raise ctx.error("[initial] Q", "Q is inertial; with frame = 'orbital' give omega (relative rates)")
-            return state_from_orbital(body, orbit, q, ini["omega"] * U.RATE)
+            return state_from_orbital(body, orbit, q, ini["omega"] if body.dimensionless else ini["omega"] * U.RATE)
         if "Q" in ini:
             return State(body, q, ini["Q"])
         w = ini["omega"] if body.dimensionless else ini["omega"] * U.RATE

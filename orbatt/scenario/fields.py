@@ -125,8 +125,8 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
             raise ctx.error(where, f"{value!r} has {what}; an angle needs an angle unit, e.g. '{number:g} deg' "
                                    f"or '{number:g} rad'")
         if dimensionless and not angle and unit != U.DIMENSIONLESS and qunit != U.DIMENSIONLESS:
-            raise ctx.error(where, f"{value!r} has a unit but the scenario is dimensionless (plain-number "
-                                   "inertia); give a plain number or give the inertia with units")
+            raise ctx.error(where, f"{value!r} has a unit but [body] inertia is plain numbers (normalized "
+                                   "units); give a plain number or give the inertia with units")
         if not math.isfinite(number):
             raise ctx.error(where, f"{value!r} is not finite; give a finite value")
         try:

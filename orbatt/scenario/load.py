@@ -56,7 +56,7 @@ class Scenario:
             period = tle_period(spec.orbit)
         elif spec.orbit is not None:
             kepler = build_kepler_orbit(ctx, spec.orbit)
-            period = kepler.period
+            period = kepler.period_value
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
         check_work(ctx, self.t_end, period)  # the orbit alone, before REBOUND samples it
         if provider == "tle":

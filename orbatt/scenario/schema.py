@@ -5,7 +5,10 @@ and tables are refused, every quantity is checked for its dimension) and returns
 :class:`Scenario` whose :meth:`Scenario.run` returns the result Dataset.
 
 Schema (the contract other tools read; quantities are strings astropy parses, e.g.
-``"7000 km"``, ``"30 deg"``, ``"0.001 rad / s"``; plain numbers mean dimensionless)::
+``"7000 km"``, ``"30 deg"``, ``"0.001 rad / s"``; plain numbers mean dimensionless: a
+scenario written in plain numbers throughout, ``gm`` and ``a`` included, is in normalized
+units, lengths in the unit of ``a`` and times in the unit ``gm`` implies; a mix of plain and
+dimensional quantities is refused naming the first plain key)::
 
     name = "..."                  # optional; defaults to the file name
     description = "..."           # optional, one line
@@ -67,12 +70,13 @@ from ..errors import InputError
 from ..epoch import parse_epoch
 from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
-from .torques_schema import parse_torques
+from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
 from ..methods.problem import MAX_ATOL, MAX_RTOL
 from ..orbits import R_EARTH
 
-__all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES", "PROVIDERS"]
+__all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES",
+           "PROVIDERS"]
 
 TOP_KEYS = {"name", "description"}
 TABLES = {
@@ -83,8 +87,99 @@ TABLES = {
               "mean_anomaly", "epoch", "perturbations", "integrator", "tle", "tle_file"},
     "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
-    "torques": None,  # keys checked by parse_torques (torques_schema.py)
-    "environment": None,
+    "torques": TORQUE_KEYS,  # validated by parse_torques (torques_schema.py)
+    "environment": ENVIRONMENT_KEYS,
+}
+#: what each key of :data:`TABLES` is: ``(dimension, default, meaning)`` (``docs/scenarios.md``
+#: is generated from this table by :mod:`orbatt.scenario.reference`; a test keeps the two equal
+#: and every key described). "plain" dimensions are numbers without a unit; a quantity is a
+#: string astropy parses ("7000 km"), or a plain number in a scenario in normalized units.
+KEY_DOCS = {
+    "": {
+        "name": ("text", "the file name", "the scenario's name (Dataset title, `orbatt scenarios`)"),
+        "description": ("text", '""', "one line saying what the study is"),
+    },
+    "body": {
+        "inertia": ("mass x length^2, 3 values", "required", "principal moments [I1, I2, I3] about body axes 1, 2, "
+                    "3; plain numbers make the scenario dimensionless (normalized units)"),
+        "mass_g": ("force", "required for heavy-top", "weight M g of the heavy top"),
+        "center_of_mass": ("length, 3 values", "required for heavy-top", "centre of mass in body axes, relative to "
+                           "the fixed point"),
+        "facets": ("array of tables", "none", "[[body.facets]]: the flat plates of the body, for [torques] drag and "
+                   "srp (keys below)"),
+    },
+    "body.facets": {
+        "area": ("area", "required", "the plate's area (> 0)"),
+        "normal": ("plain, 3 values", "required", "outward unit normal, body axes"),
+        "position": ("length, 3 values", "required", "centre of pressure from the centre of mass, body axes"),
+        "drag_coefficient": ("plain", "2.2", "C_D of the plate (drag)"),
+        "specular": ("plain in [0, 1]", "0", "specular reflectivity (SRP); absorbed = 1 - specular - diffuse"),
+        "diffuse": ("plain in [0, 1]", "0", "diffuse reflectivity (SRP)"),
+    },
+    "torques": {
+        "drag": ("true | false", "false", "aerodynamic drag of the facets (needs [[body.facets]])"),
+        "srp": ("true | false", "false", "solar radiation pressure on the facets (needs facets and [orbit] epoch)"),
+        "residual_dipole": ("magnetic moment (A m2), 3 values", "none", "the body's dipole m: torque m x B (body "
+                            "axes)"),
+    },
+    "environment": {
+        "atmosphere": ("'exponential' | 'nrlmsis' | 'none'", "'exponential' with drag", "density model (NRLMSIS "
+                       "2.1 through pymsis needs the epoch and f107, f107a, ap)"),
+        "density0": ("density", "Vallado's table", "exponential: density at altitude0 (with altitude0, "
+                     "scale_height)"),
+        "altitude0": ("length", "Vallado's table", "exponential: reference altitude above the equatorial radius"),
+        "scale_height": ("length", "Vallado's table", "exponential: scale height"),
+        "corotation": ("true | false", "true", "the atmosphere turns with the Earth (drag uses v - omega_E x r)"),
+        "f107": ("plain", "required for nrlmsis", "daily F10.7 solar flux (sfu); never downloaded"),
+        "f107a": ("plain", "required for nrlmsis", "81-day mean F10.7 (sfu)"),
+        "ap": ("plain", "required for nrlmsis", "daily Ap geomagnetic index"),
+        "magnetic_field": ("'igrf' | 'dipole' | 'none'", "'igrf' with a residual dipole", "IGRF-14 (ppigrf) or "
+                           "its tilted dipole at the epoch"),
+        "shadow": ("'conical' | 'cylindrical' | 'none'", "'conical'", "the Earth's shadow for SRP (umbra and "
+                   "penumbra)"),
+    },
+    "initial": {
+        "q": ("plain, 4 values", "-", "attitude quaternion (q0 scalar first), body -> `frame` components; |q| = 1"),
+        "Q": ("momentum, 4 values", "-", "conjugate momentum Q = 2 q (0, I omega) (inertial frame only)"),
+        "omega": ("angular rate, 3 values", "-", "body angular velocity in body axes (relative to the orbital frame "
+                  "when frame = 'orbital')"),
+        "euler_313": ("angle, 3 values", "-", "3-1-3 Euler angles (phi, theta, psi) instead of q"),
+        "euler_momenta": ("momentum, 3 values", "-", "momenta conjugate to the 3-1-3 angles (inertial frame only)"),
+        "frame": ("'inertial' | 'orbital'", "'inertial'", "the frame q, euler_313 and omega are relative to"),
+    },
+    "potential": {
+        "kind": ("'torque-free' | 'heavy-top' | 'gravity-gradient'", "required", "the torque acting on the body"),
+        "sign": ("'physical' | 'paper'", "'physical'", "heavy top: U = M g z_c, or eq. (18) as printed (Fig. 2)"),
+    },
+    "orbit": {
+        "provider": ("'kepler' | 'rebound' | 'tle'", "'kepler'", "Keplerian elements, REBOUND integration, or SGP4 "
+                     "from a TLE"),
+        "central_body": ("'earth'", "'earth'", "the central body (its GM from astropy); or give gm"),
+        "gm": ("length^3 / time^2", "the Earth's", "central body's G M (a plain number in normalized units: gm = 1, "
+               "a = 1 make the mean motion 1)"),
+        "a": ("length", "required (not tle)", "semi-major axis (> 0; the unit of length in normalized units)"),
+        "e": ("plain", "required (not tle)", "eccentricity, 0 <= e < 1"),
+        "i": ("angle", "required (not tle)", "inclination to the s1-s2 plane of the inertial frame"),
+        "raan": ("angle", "required (not tle)", "right ascension of the ascending node"),
+        "argp": ("angle", "required (not tle)", "argument of periapsis"),
+        "true_anomaly": ("angle", "one of the two", "true anomaly at t = 0"),
+        "mean_anomaly": ("angle", "one of the two", "mean anomaly at t = 0"),
+        "epoch": ("ISO time (UTC)", "none; tle: the TLE's", "the instant t = 0 (CF time axis, third bodies)"),
+        "perturbations": ("list of 'j2' | 'moon' | 'sun'", "[]", "rebound: forces besides the central point mass"),
+        "integrator": ("'ias15' | 'whfast'", "'ias15'", "rebound: the REBOUND integrator"),
+        "tle": ("2 text lines", "one of tle, tle_file", "tle: the two-line element set"),
+        "tle_file": ("path", "one of tle, tle_file", "tle: a file with the two lines (a name line optional), "
+                     "relative to the scenario file"),
+    },
+    "integration": {
+        "method": ("text", "'dop853'", "the integration method (`orbatt methods` lists them)"),
+        "rtol": ("plain", "the method's", "relative tolerance (adaptive methods)"),
+        "atol": ("plain", "the method's", "absolute tolerance (adaptive methods)"),
+        "step": ("time or 'N orbits'", "required by fixed-step methods", "the fixed step"),
+        "t_end": ("time or 'N orbits'", "required", "the span; outputs at k * output_step <= t_end"),
+        "output_step": ("time or 'N orbits'", "required", "spacing of the output times"),
+    },
+    "sweep": {},  # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
 }
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: physical range of a key in a dimensional scenario, internal units (km, s, kg, rad), inclusive
@@ -192,14 +287,13 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     if kind == "gravity-gradient":
         if "orbit" not in data:
             raise ctx.error("[orbit]", "missing table; the gravity-gradient potential needs an orbit")
-        if dimless:
-            raise ctx.error("[body] inertia", "the gravity-gradient potential needs a dimensional inertia "
-                                              "(e.g. '400 kg km2') to go with the orbit's units")
-        orbit = _parse_orbit(ctx, data["orbit"], source)
+        orbit = _parse_orbit(ctx, data["orbit"], source, dimless)
     elif "orbit" in data:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
     torques = parse_torques(ctx, data, kind, orbit)
+    if torques is not None and dimless:
+        raise ctx.error("[torques]", "the environment torques need a dimensional scenario ([body] inertia with units)")
     init = data["initial"]
     frame = parse_choice(ctx, "[initial] frame", init.get("frame", "inertial"), FRAMES)
     if frame == "orbital" and orbit is None:
@@ -222,8 +316,25 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
                 integration=integ, sweep=sweep, torques=torques)
 
 
-def _parse_orbit(ctx, o, source="<scenario>"):
+def _check_normalized_orbit(ctx, o):
+    """A dimensionless scenario's orbit (normalized units): ``gm`` given as a plain number, no
+    named central body, no calendar epoch, no TLE."""
+    if o.get("provider") == "tle":
+        raise ctx.error("[orbit] provider", "'tle' needs a dimensional scenario, but [body] inertia is plain numbers "
+                                            "(normalized units); give the inertia with units, e.g. '400 kg m^2'")
+    for k in ("central_body", "epoch"):
+        if k in o:
+            raise ctx.error(f"[orbit] {k}", "not used in normalized units ([body] inertia is plain numbers): remove "
+                                            "it and give gm as a plain number (gm = 1.0 with a = 1.0: mean motion 1)")
+    if "gm" not in o:
+        raise ctx.error("[orbit] gm", "missing; in normalized units ([body] inertia is plain numbers) give gm as a "
+                                      "plain number (gm = 1.0 with a = 1.0 makes the mean motion 1)")
+
+
+def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
     out = {}
+    if dimless:
+        _check_normalized_orbit(ctx, o)
     out["provider"] = parse_choice(ctx, "[orbit] provider", o.get("provider", "kepler"), PROVIDERS)
     if out["provider"] == "tle":
         return _parse_tle_orbit(ctx, o, source)
@@ -233,7 +344,7 @@ def _parse_orbit(ctx, o, source="<scenario>"):
     if "gm" in o and "central_body" in o:
         raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
     if "gm" in o:
-        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=False,
+        out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=dimless,
                                    bounds=RANGES["[orbit] gm"])
         out["central_body"] = None
     else:
@@ -241,7 +352,7 @@ def _parse_orbit(ctx, o, source="<scenario>"):
     for k in ("a", "e", "i", "raan", "argp"):
         if k not in o:
             raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
-    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=False, bounds=RANGES["[orbit] a"])
+    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=dimless, bounds=RANGES["[orbit] a"])
     out["e"] = parse_quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
     if not 0 <= out["e"] < 1:
         raise ctx.error("[orbit] e", f"{o['e']!r} is outside [0, 1): only elliptic orbits are supported")
@@ -257,6 +368,7 @@ def _parse_orbit(ctx, o, source="<scenario>"):
         raise ctx.error("[orbit] true_anomaly", "give exactly one of true_anomaly or mean_anomaly")
     out["anomaly_kind"] = anomalies[0]
     out["anomaly"] = parse_quantity(ctx, f"[orbit] {anomalies[0]}", o[anomalies[0]], U.ANGLE, dimensionless=False)
+    out["dimensionless"] = dimless
     if "epoch" in o:
         try:  # the orbit providers' own parser: a string astropy parses, taken as UTC
             out["epoch"] = parse_epoch(str(o["epoch"]))

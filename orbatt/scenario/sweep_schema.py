@@ -17,12 +17,27 @@ from ..dataset import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from .fields import parse_int, parse_quantity
 
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
-           "SWEEP_KEYS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
+           "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
            "parameter_unit", "parameter_units", "in_limits", "limits_text"]
 
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
               "tumbling_angle", "on_invalid")
+#: what each key of [sweep] is: ``(dimension, default, meaning)`` (``docs/scenarios.md``)
+SWEEP_KEY_DOCS = {
+    "parameters": ("table", "required", "[sweep.parameters]: each varied parameter, with `values = [...]` (a grid) or "
+                   "a `distribution` ('uniform': low, high; 'normal': mean, std; 'truncnormal': mean, std, low, high)"),
+    "samples": ("plain integer", "required with random parameters", "number of random draws"),
+    "seed": ("plain integer", "drawn and recorded", "seed of the random draws (numpy PCG64)"),
+    "chunk_size": ("plain integer", "automatic", "cases per task"),
+    "outputs": ("list", "['final_state', 'max_pointing_error', 'tumbling']", "per-case outputs, of 'trajectory', "
+                "'final_state', 'max_pointing_error', 'tumbling', 'final_energy_error'"),
+    "pointing_axis": ("plain, 3 values", "none: the whole attitude", "body axis whose pointing error is measured "
+                      "(without it: the rotation angle of the attitude from the reference)"),
+    "pointing_reference": ("'orbital' | 'inertial'", "the [initial] frame", "frame the pointing is measured in"),
+    "tumbling_angle": ("angle", "90 deg", "pointing error beyond which a case tumbles"),
+    "on_invalid": ("'error' | 'resample'", "'error'", "what to do with a draw outside the physical limits"),
+}
 #: outputs that may be asked for
 OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error")
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
@@ -250,7 +265,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             if name in ("orbit_true_anomaly", "orbit_mean_anomaly") and name[6:] != orbit["anomaly_kind"]:
                 raise ctx.error(where, f"the [orbit] gives {orbit['anomaly_kind']}; vary orbit_{orbit['anomaly_kind']}")
         unit = parameter_unit(p.kind)
-        dimless = dimensionless if p.kind in ("inertia", "rate") else p.kind in ("one", "angle")
+        dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
         cf = units[name]
 
         def q(key, value, _where=where, _unit=unit, _dimless=dimless):

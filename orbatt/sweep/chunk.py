@@ -227,7 +227,7 @@ def conserved_energy(spec, potential, orbit, inertia, q, Q, t):
     if spec.energy == "jacobi":
         h = qt.rotate(orbit.orbital_quaternion(np.array(0.0)), np.array([0.0, 0.0, 1.0]))
         G = cn.space_momentum(q, Q)
-        H = H - orbit.n * (G[:, 0] * h[0] + G[:, 1] * h[1] + G[:, 2] * h[2])
+        H = H - orbit.n_value * (G[:, 0] * h[0] + G[:, 1] * h[1] + G[:, 2] * h[2])
     return H
 
 

@@ -145,7 +145,7 @@ def test_with_the_kepler_provider():
     gg = getattr(orbatt.potentials, "GravityGradient", None)
     pot = gg(orbit) if gg is not None else _KernelPotential(orbit)
     body = orbatt.RigidBody([400, 500, 600] * u.kg * u.km**2)
-    t = np.linspace(0.0, orbit.period, 121)
+    t = np.linspace(0.0, orbit.period_value, 121)
     tr = _propagate(body, Q0_PAPER, _tangent(Q0_PAPER, P0_PAPER), pot, t, inertia=body.inertia_value)
     ds = D.to_dataset(tr)
     _every_units_parses(ds)

@@ -73,5 +73,5 @@ def test_unknown_perturbation_named():
 def test_dimensionless_scenario_refuses_units_on_omega():
     t = (SCEN / "paper-torque-free.toml").read_text()
     t = t.replace("Q = [0.3, -0.848528, 0.141421, -1.5]", 'omega = ["1 rad/s", 0, 0]')
-    with pytest.raises(ScenarioError, match=r"omega\[0\].*dimensionless"):
+    with pytest.raises(ScenarioError, match=r"omega\[0\].*has a unit but \[body\] inertia is plain"):
         parse(t)

@@ -116,7 +116,7 @@ def test_dimensionless_scenarios_take_plain_numbers():
     sw = sweep_of(sweep_on(TORQUE_FREE, 'samples = 5\nseed = 1\n[sweep.parameters]\n'
                                         'inertia2 = { distribution = "uniform", low = 0.9, high = 1.1 }\n'))
     assert sw.units["inertia2"] == "1" and np.all((sw.values["inertia2"] >= 0.9) & (sw.values["inertia2"] < 1.1))
-    with pytest.raises(ScenarioError, match=r"has a unit but the scenario is dimensionless"):
+    with pytest.raises(ScenarioError, match=r"has a unit but \[body\] inertia is plain"):
         parse(sweep_on(TORQUE_FREE, 'samples = 5\n[sweep.parameters]\ninertia2 = { distribution = "normal", '
                                     'std = "1 kg m2" }\n'))
 
