@@ -119,8 +119,10 @@ def _foreign_files(d: Path, result: Path):
     files["truncated"] = d / "truncated.nc"
     files["truncated"].write_bytes(data[: len(data) // 2])
     flipped = bytearray(data)
-    k = len(data) // 2
-    flipped[k:k + 16] = bytes(b ^ 0xFF for b in flipped[k:k + 16])
+    with h5py.File(result, "r") as f:  # flip bytes inside the first data chunk of q (checksummed)
+        info = f["q"].id.get_chunk_info(0)
+    k = info.byte_offset + info.size // 2
+    flipped[k:k + 8] = bytes(b ^ 0xFF for b in flipped[k:k + 8])
     files["byte-flipped"] = d / "flipped.nc"
     files["byte-flipped"].write_bytes(bytes(flipped))
     files["missing"] = d / "missing.nc"
