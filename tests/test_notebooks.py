@@ -2,8 +2,10 @@
 checks), in fast mode (``ORBATT_NOTEBOOK_FAST=1``), on a kernel running this interpreter.
 
 Needs ``nbformat``, ``nbclient`` and ``ipykernel`` (in the ``test`` extra); skipped with the
-reason when they are missing. The notebooks are committed without outputs (checked without
-those packages).
+reason when they are missing. The notebooks of :data:`NOTEBOOKS` are committed without outputs;
+those of :data:`NOTEBOOKS_WITH_OUTPUTS` (a result to read on GitHub without running it: the
+torque budget) are committed executed, every code cell in order, with their figures (both
+checked without those packages).
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import pytest
 
 NOTEBOOK_DIR = Path(__file__).resolve().parent.parent / "notebooks"
 NOTEBOOKS = ["paper_figures.ipynb", "gg_stabilized_satellite.ipynb"]
+NOTEBOOKS_WITH_OUTPUTS = ["torque_budget.ipynb"]
 KERNEL_NAME = "orbatt-test-python"
 CELL_TIMEOUT_S = 600  # a cold numba cache compiles the kernels on first use
 
@@ -35,6 +38,17 @@ def test_notebook_committed_without_outputs(name):
     assert not dirty, f"{name}: code cells {dirty} have outputs; clear them before committing"
 
 
+@pytest.mark.parametrize("name", NOTEBOOKS_WITH_OUTPUTS)
+def test_notebook_committed_with_outputs(name):
+    nb = json.loads(_path(name).read_text(encoding="utf-8"))
+    code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+    counts = [c.get("execution_count") for c in code]
+    assert counts == list(range(1, len(code) + 1)), f"{name}: execute it top to bottom before committing ({counts})"
+    outputs = [o for c in code for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"], f"{name}: committed with an error output"
+    assert any("image/png" in o.get("data", {}) for o in outputs), f"{name}: no figure in the committed outputs"
+
+
 def _kernel_manager(tmp_path):
     """A kernel manager whose kernel is ``sys.executable -m ipykernel_launcher``.
 
@@ -52,7 +66,7 @@ def _kernel_manager(tmp_path):
     return KernelManager(kernel_name=KERNEL_NAME, kernel_spec_manager=ksm)
 
 
-@pytest.mark.parametrize("name", NOTEBOOKS)
+@pytest.mark.parametrize("name", NOTEBOOKS + NOTEBOOKS_WITH_OUTPUTS)
 def test_notebook_executes(name, tmp_path, monkeypatch):
     nbformat = pytest.importorskip("nbformat", reason="nbformat not installed (pip install 'orbatt[test]')")
     nbclient = pytest.importorskip("nbclient", reason="nbclient not installed (pip install 'orbatt[test]')")
