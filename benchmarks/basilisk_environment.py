@@ -1,6 +1,6 @@
 """orbatt's environment torques against Basilisk 2.12 and against a classical model written here.
 
-Run from a checkout: ``python benchmarks/basilisk_environment.py`` (about a minute on 2 cores;
+Run from a checkout: ``python benchmarks/basilisk_environment.py`` (about 20 s on 2 cores;
 ``--quick`` runs a fifth of an orbit). Basilisk (``pip install bsk``, the ``bench`` extra) is
 optional: without it only orbatt and the classical model are compared.
 
@@ -145,6 +145,14 @@ def torque_srp(R, r, sun):
     c = cos[lit]
     F = -pressure * (AREA[lit] * c)[:, None] * ((1 - CS[lit])[:, None] * s + (2 * (CS[lit] * c + CDIFF[lit] / 3))[:, None] * N[lit])
     return np.cross(P[lit], F).sum(axis=0)
+
+
+def reference_torques(t, q, sun):
+    """Each term's torque (N m, body axes) of the classical formulas at ``t`` (s) and ``q``."""
+    R = dcm(q)
+    r, v = _kepler(t)
+    return {"gravity_gradient": torque_gravity_gradient(R, r), "drag": torque_drag(R, v, density(r)),
+            "srp": torque_srp(R, r, sun(t))}
 
 
 def sun_spline(t_end):
@@ -420,10 +428,7 @@ def instants(t_out, qo, ds, terms, sun, basilisk, picks=4):
     rows = []
     for k in np.linspace(0, len(t_out) - 1, picks).astype(int):
         t, q = float(t_out[k]), qo[k]
-        R = dcm(q)
-        r, v = _kepler(t)
-        ref = {"gravity_gradient": torque_gravity_gradient(R, r), "drag": torque_drag(R, v, density(r)),
-               "srp": torque_srp(R, r, sun(t))}
+        ref = reference_torques(t, q, sun)
         tb = basilisk_torques(t, q, ds.omega.values[k], terms, sun=sun) if basilisk else {}
         for name in terms:
             tc = ref[name]
