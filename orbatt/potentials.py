@@ -60,7 +60,7 @@ class Potential:
 
     def term_torques(self, body, t, q):
         """Each term's body torque ``(N, len(term_names), 3)`` in the body's energy unit (kg
-        km^2 s^-2 = kN m) at the times ``t`` and attitudes ``q (N, 4)``."""
+        km^2 s^-2 = 1e6 N m) at the times ``t`` and attitudes ``q (N, 4)``."""
         _, _, tau = self.evaluate(body, t, q)
         return np.asarray(tau, dtype=np.float64)[:, None, :]
 

@@ -9,7 +9,7 @@ interpolated in the compiled kernel (cubic splines; the tables' errors are state
 :mod:`orbatt.environment.tables`). The kernel terms are in :mod:`orbatt.core.model` and
 :mod:`orbatt.core.torques`.
 
-Internal units: kg, km, s (torques in kg km^2 s^-2 = 1 kN m); facet areas given in m^2,
+Internal units: kg, km, s (torques in kg km^2 s^-2 = 1e6 N m); facet areas given in m^2,
 densities in kg m^-3, dipoles in A m^2 and fields in T at the boundary.
 """
 from __future__ import annotations
@@ -248,7 +248,7 @@ class EnvironmentTorques(Potential):
         return super().evaluate(body, t, q)
 
     def term_torques(self, body, t, q):
-        """Each term's body torque ``(N, n_terms, 3)`` (kg km^2 s^-2 = kN m) at the times ``t``
+        """Each term's body torque ``(N, n_terms, 3)`` (kg km^2 s^-2 = 1e6 N m) at the times ``t``
         (s) and attitudes ``q (N, 4)``."""
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
         t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
