@@ -38,7 +38,7 @@ class Potential:
         """``(U, dU/dq, torque)`` at times ``t (N,)`` and attitudes ``q (N, 4)``.
 
         ``U`` in the body's energy unit; ``dU/dq`` (tangential, ``(N, 4)``) in energy unit;
-        torque in body components (``(N, 3)``, energy unit = kg km^2 s^-2 = N km for
+        torque in body components (``(N, 3)``, energy unit = kg km^2 s^-2 = 1e6 N m for
         dimensional bodies).
         """
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
@@ -138,7 +138,7 @@ class GravityGradient(Potential):
     ----------
     orbit : OrbitProvider
         The orbit (times in seconds since its epoch). A dimensional orbit acts on
-        dimensional bodies (inertia in kg km^2; energies in kg km^2 s^-2, torques in N km),
+        dimensional bodies (inertia in kg km^2; energies and torques in kg km^2 s^-2 = 1e6 N m),
         a dimensionless one (plain ``a`` and ``gm``, normalized units) on dimensionless
         bodies (plain numbers throughout).
 
@@ -184,7 +184,7 @@ class GravityGradient(Potential):
     def evaluate(self, body, t, q):
         """``(U, dU/dq, torque)`` at times ``t`` (s since the orbit's epoch) and attitudes
         ``q (N, 4)``: ``U`` in kg km^2 s^-2, ``dU/dq`` ``(N, 4)``, body torque ``(N, 3)`` in
-        kg km^2 s^-2 (N km)."""
+        kg km^2 s^-2 (1e6 N m)."""
         self.check_body(body)
         if self.time_span is not None:
             tt = np.asarray(t, dtype=np.float64)
