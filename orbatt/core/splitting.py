@@ -58,7 +58,7 @@ import numpy as np
 
 from ._jit import (DONE, EPS, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, jit, jit_inline,
                    jit_parallel, keepalive)
-from .hamiltonian import rhs, rhs_lanes
+from .hamiltonian import rhs_inline, rhs_lanes
 from .model import gradient, gradient_lanes
 from .qalg import qmul
 
@@ -107,6 +107,8 @@ SPLITTING = 0
 RK4 = 1
 
 KINETIC = ("shifted", "axes")
+#: RK4's stage nodes (and the weights of the previous stage in each): y + a h k_{s-1}
+RK4_NODES = np.array([0.0, 0.5, 0.5, 1.0])
 
 # ``st`` layout: cached gradient (4), validity flag (1)
 ST_SIZE = 5
@@ -257,20 +259,19 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, para
 
 
 @jit_inline
-def _rk4_step(y, t, h, inertia, terms, params, table, work, k1, k2, k3, k4, ytmp):
-    """Classical RK4 step, in place on ``y`` (4 RHS evaluations)."""
-    rhs(t, y, inertia, terms, params, table, work, k1)
+def _rk4_step(y, t, h, inertia, terms, params, table, work, K, ytmp):
+    """Classical RK4 step, in place on ``y`` (4 RHS evaluations into ``K (4, 8)``), with one
+    inlined right-hand side (a loop over the stages)."""
+    for s in range(4):
+        if s == 0:
+            rhs_inline(t, y, inertia, terms, params, table, work, K[0])
+        else:
+            a = RK4_NODES[s]
+            for i in range(NDIM):
+                ytmp[i] = y[i] + a * h * K[s - 1, i]
+            rhs_inline(t + a * h, ytmp, inertia, terms, params, table, work, K[s])
     for i in range(NDIM):
-        ytmp[i] = y[i] + 0.5 * h * k1[i]
-    rhs(t + 0.5 * h, ytmp, inertia, terms, params, table, work, k2)
-    for i in range(NDIM):
-        ytmp[i] = y[i] + 0.5 * h * k2[i]
-    rhs(t + 0.5 * h, ytmp, inertia, terms, params, table, work, k3)
-    for i in range(NDIM):
-        ytmp[i] = y[i] + h * k3[i]
-    rhs(t + h, ytmp, inertia, terms, params, table, work, k4)
-    for i in range(NDIM):
-        y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+        y[i] += h / 6.0 * (K[0, i] + 2.0 * (K[1, i] + K[2, i]) + K[3, i])
 
 
 @jit_inline
@@ -354,8 +355,7 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
             ytmp = scratch[0]
             ytmp[0], ytmp[1], ytmp[2], ytmp[3] = q
             ytmp[4], ytmp[5], ytmp[6], ytmp[7] = Q
-            _rk4_step(ytmp, tk, step, inertia, terms, params, table, work, scratch[1], scratch[2], scratch[3],
-                      scratch[4], scratch[5])
+            _rk4_step(ytmp, tk, step, inertia, terms, params, table, work, scratch[1:5], scratch[5])
             nev += 4
             qn = (ytmp[0], ytmp[1], ytmp[2], ytmp[3])
             Qn = (ytmp[4], ytmp[5], ytmp[6], ytmp[7])
