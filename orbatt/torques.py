@@ -37,23 +37,12 @@ _AREA = u.m**2
 _LENGTH_M = u.m
 
 
-def _quantity(value, unit, name, example):
-    if isinstance(value, (list, tuple)):
-        return np.array([_quantity(v, unit, f"{name}[{k}]", example) for k, v in enumerate(value)], dtype=np.float64)
-    try:
-        q = u.Quantity(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: cannot read {value!r} as a quantity; write e.g. '{example}'") from None
-    if q.unit == u.one and unit != u.one:
-        raise InputError(f"{name}: {value!r} has no unit; write e.g. '{example}'")
-    try:
-        v = q.to_value(unit)
-    except u.UnitConversionError:
-        raise InputError(f"{name}: {value!r} is not a {unit.physical_type}; write e.g. '{example}'") from None
-    v = np.asarray(v, dtype=np.float64)
-    if not np.all(np.isfinite(v)):
-        raise InputError(f"{name}: {value!r} is not finite")
-    return v
+def _quantity(value, unit, name):
+    """:func:`orbatt.units.strip` (a Quantity or a string astropy parses, with the dimension
+    of ``unit``), element by element for a list such as ``["0 m", "0.1 m", "0.03 m"]``."""
+    if isinstance(value, (list, tuple)) and any(isinstance(v, (str, u.Quantity)) for v in value):
+        return np.array([U.strip(v, unit, f"{name}[{k}]") for k, v in enumerate(value)], dtype=np.float64)
+    return U.strip(value, unit, name)
 
 
 class Facet:
@@ -74,13 +63,13 @@ class Facet:
     """
 
     def __init__(self, area, normal, position, drag_coefficient=2.2, specular=0.0, diffuse=0.0, *, name="facet"):
-        a = float(_quantity(area, _AREA, f"{name}.area", "0.06 m2"))
+        a = float(_quantity(area, _AREA, f"{name}.area"))
         if not a > 0.0:
             raise InputError(f"{name}.area: {area!r} must be positive")
         n = np.asarray(normal, dtype=np.float64)
         if n.shape != (3,) or not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1.0) > 1e-9:
             raise InputError(f"{name}.normal: {normal!r} is not a unit 3-vector (|n| = 1); normalize it")
-        p = _quantity(position, _LENGTH_M, f"{name}.position", "['0 m', '0.1 m', '0.03 m']")
+        p = _quantity(position, _LENGTH_M, f"{name}.position")
         if p.shape != (3,):
             raise InputError(f"{name}.position: expected 3 lengths, got {position!r}")
         for key, v in (("drag_coefficient", drag_coefficient), ("specular", specular), ("diffuse", diffuse)):
@@ -154,8 +143,8 @@ class EnvironmentTorques(Potential):
         if not isinstance(orbit, OrbitProvider):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got {type(orbit).__name__}")
         self.orbit = orbit
-        t0 = float(_quantity(t_start, u.s, "t_start", "0 s"))
-        t1 = float(_quantity(t_end, u.s, "t_end", "1 d"))
+        t0 = float(_quantity(t_start, u.s, "t_start"))
+        t1 = float(_quantity(t_end, u.s, "t_end"))
         if not t1 > t0:
             raise InputError(f"t_end: {t_end!r} must come after t_start = {t_start!r}")
         self.facets = list(facets)
@@ -172,7 +161,7 @@ class EnvironmentTorques(Potential):
             raise InputError("epoch: SRP needs the orbit's epoch (the Sun's position)")
         dip = None
         if residual_dipole is not None:
-            dip = _quantity(residual_dipole, u.A * u.m**2, "residual_dipole", "['0.005 A m2', '0 A m2', '0 A m2']")
+            dip = _quantity(residual_dipole, u.A * u.m**2, "residual_dipole")
             if dip.shape != (3,):
                 raise InputError(f"residual_dipole: expected 3 components, got {residual_dipole!r}")
             if magnetic_field is None:
