@@ -51,7 +51,7 @@ from .hamiltonian import rhs, rhs_inline
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
-__all__ = ["advance", "advance_batch", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
+__all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
            "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
            "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_SIZE", "CNT_STEPS", "CNT_REJECTED",
            "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
@@ -81,11 +81,12 @@ CNT_FLAGS = 5     # FLAG_* bits of orbatt.core._jit (and, for groups, the failin
 CNT_SIZE = 6
 
 
-def new_state(batch=None):
-    """Fresh ``(st, cnt, f0)`` arrays, for one trajectory or a ``batch`` of them."""
+def new_state(batch=None, width=NDIM):
+    """Fresh ``(st, cnt, f0)`` arrays, for one trajectory or a ``batch`` of them, of states of
+    ``width`` components (8, plus one per reaction wheel)."""
     shape = () if batch is None else (batch,)
     return (np.zeros(shape + (ST_SIZE,)), np.zeros(shape + (CNT_SIZE,), dtype=np.int64),
-            np.zeros(shape + (NDIM,)))
+            np.zeros(shape + (width,)))
 
 
 # ---------------------------------------------------------------------------------------
@@ -117,12 +118,13 @@ def hinit_refine(der2, dnf, h0):
 
 
 @jit_inline
-def error_norm(e5, e3, hh):
-    """Hairer's error of a step of size ``hh`` from the sums of squares ``e5``, ``e3``."""
+def error_norm(e5, e3, hh, n):
+    """Hairer's error of a step of size ``hh`` from the sums of squares ``e5``, ``e3`` over
+    ``n`` components."""
     deno = e5 + 0.01 * e3
     if deno <= 0.0:
         deno = 1.0
-    return abs(hh) * e5 * math.sqrt(1.0 / (NDIM * deno))
+    return abs(hh) * e5 * math.sqrt(1.0 / (n * deno))
 
 
 @jit_inline
@@ -174,10 +176,11 @@ def reject_nonfinite(cnt, flags, hh):
 @jit_inline
 def hinit_norms(y, f, atol, aQ, rtol):
     """``(dnf, dny)``: the squared scaled norms of ``f`` and ``y`` (Hairer's ``hinit``); ``y``
-    and ``f`` are the 8 components of one member."""
+    and ``f`` are the components of one member (``q``, ``Q``, then the wheels' momenta,
+    weighted as ``Q``)."""
     dnf = 0.0
     dny = 0.0
-    for i in range(NDIM):
+    for i in range(y.shape[0]):
         sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
         dnf += (f[i] / sk) ** 2
         dny += (y[i] / sk) ** 2
@@ -188,7 +191,7 @@ def hinit_norms(y, f, atol, aQ, rtol):
 def hinit_der2(y, f0, f1, atol, aQ, rtol):
     """The squared scaled norm of ``f1 - f0`` (Hairer's second-derivative estimate)."""
     der2 = 0.0
-    for i in range(NDIM):
+    for i in range(y.shape[0]):
         sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
         der2 += ((f1[i] - f0[i]) / sk) ** 2
     return der2
@@ -228,189 +231,216 @@ def _initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol,
     h = min(hinit_guess(dnf, dny), hmax)
     if not (h > 0.0 and h < np.inf):
         return h
-    for i in range(NDIM):
+    for i in range(y.shape[0]):
         ytmp[i] = y[i] + h * f0[i]
     rhs(t + h, ytmp, inertia, terms, params, table, work, f1)
     return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
 
 
-@jit
-def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, params, table,
-            work, rtol, atol, max_step, max_steps, budget):
-    """Advance one trajectory towards the output times ``t_out[cnt[CNT_IOUT]:]``.
+def _advance_of(width):
+    """The one-trajectory step loop for states of ``width`` components (0: any width,
+    ``len(y)``). The rigid body's loop keeps the constant 8, which LLVM unrolls, so it runs as
+    fast as before wider states existed (measured on the Keplerian case: 1.29 ms both)."""
 
-    Parameters
-    ----------
-    y : (8,) state ``(q, Q)`` at ``st[ST_T]``; updated in place.
-    st, cnt, f0 : per-trajectory integrator state (:func:`new_state`); updated in place.
-    t_out : (N,) increasing output times, all after ``st[ST_T]``.
-    rec_t, out_y : outputs. Default mode: ``out_y[i]`` (N, 8) receives ``y(t_out[i])``
-        (``rec_t`` unused). ``record_all``: every accepted step appends its time to
-        ``rec_t`` and its state to ``out_y`` (capacity ``len(rec_t)``; returns
-        :data:`BUFFER_FULL` when full); integration stops at ``t_out[-1]``.
-    inertia : (3,) principal moments.
-    terms, params, table, work : the model (:mod:`orbatt.core.model`) and its scratch.
-    rtol, atol, max_step : tolerances (scipy's meaning) and the largest step allowed.
-    max_steps : limit on step attempts (accepted + rejected) over the whole run.
-    budget : step attempts allowed in this call.
+    def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, params, table,
+                work, rtol, atol, max_step, max_steps, budget):
+        """Advance one trajectory of states of ``ncomp`` components towards the output times
+        ``t_out[cnt[CNT_IOUT]:]``.
 
-    Returns a status code (:data:`DONE`, :data:`PAUSED`, ...).
-    """
-    nout = t_out.shape[0]
-    Kown = np.empty((N_STAGES + 1, NDIM))
-    tmpown = np.empty((2, NDIM))
-    K = borrow(Kown)
-    ytmp = borrow(tmpown[0])
-    ynew = borrow(tmpown[1])
-    y = borrow(y)
-    f0 = borrow(f0)
-    inertia = borrow(inertia)
-    terms = borrow(terms)
-    params = borrow(params)
-    table = borrow(table)
-    work = borrow(work)
-    t = st[ST_T]
-    h = st[ST_H]
-    facold = st[ST_FACOLD]
-    if facold <= 0.0:
-        facold = 1.0e-4
-    i_out = cnt[CNT_IOUT]
-    flags = cnt[CNT_FLAGS]
-    status = DONE
-    if i_out >= nout:
-        return DONE
-    if (flags & FLAG_F0_VALID) == 0:
-        rhs(t, y, inertia, terms, params, table, work, f0)
-        cnt[CNT_NFEV] += 1
-        flags |= FLAG_F0_VALID
-    for i in range(NDIM):
-        K[0, i] = f0[i]
-    if h <= 0.0:
-        h = _initial_step(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
-                          min(max_step, t_out[nout - 1] - t))
-        cnt[CNT_NFEV] += 1
-        if not (h > 0.0 and h < np.inf):
-            h = 1e-6 * max(1.0, abs(t_out[nout - 1] - t))
-    reject = (flags & FLAG_REJECTED) != 0
-    attempts = 0
-    # step-size floor: 10 ulps of the largest time involved (Hairer's test uses |t| only,
-    # which lets a run starting at t = 0 crawl with steps of 1e-300)
-    hmin = 10.0 * EPS * max(abs(t), abs(t_out[nout - 1]))
-    aQ = atol * momentum_scale(inertia)
-    cap = rec_t.shape[0]
-    while i_out < nout:
-        if record_all and cnt[CNT_NREC] >= cap:
-            status = BUFFER_FULL
-            break
-        t_next = t_out[i_out]
-        status, hh, landing = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags)
-        if status != DONE:
-            break
-        # --- the 12 stages
-        for s in range(1, N_STAGES):
-            for i in range(NDIM):
-                ytmp[i] = 0.0
-            for jj in range(A_PTR[s], A_PTR[s + 1]):
-                a = A_VAL[jj]
-                j = A_COL[jj]
-                for i in range(NDIM):
-                    ytmp[i] += a * K[j, i]
-            for i in range(NDIM):
-                ytmp[i] = y[i] + hh * ytmp[i]
-            rhs_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
-        cnt[CNT_NFEV] += N_STAGES - 1
-        # --- 8th-order solution and error estimate
-        e5 = 0.0
-        e3 = 0.0
-        for i in range(NDIM):
-            acc = 0.0
-            a5 = 0.0
-            a3 = 0.0
-            for j in range(N_STAGES):
-                kji = K[j, i]
-                acc += B[j] * kji
-                a5 += E5[j] * kji
-                a3 += E3[j] * kji
-            ynew[i] = y[i] + hh * acc
-            isk = 1.0 / ((atol if i < 4 else aQ) + rtol * max(abs(y[i]), abs(ynew[i])))
-            a5 *= isk
-            a3 *= isk
-            e5 += a5 * a5
-            e3 += a3 * a3
-        err = error_norm(e5, e3, hh)
-        attempts += 1
-        if not (err < np.inf):  # NaN or inf: shrink hard and retry
-            flags, h = reject_nonfinite(cnt, flags, hh)
-            reject = True
-            continue
-        fac11, hnew = controller(err, facold, hh)
-        if err <= 1.0:
-            # accepted: FSAL derivative at the new point
-            t_new = t_next if landing else t + hh
-            rhs(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
+        Parameters
+        ----------
+        y : (ncomp,) state ``(q, Q)`` (ncomp = 8), or ``(q, Q, h)`` with the reaction wheels' axial
+            momenta ``h`` (ncomp = 8 + wheels; :mod:`orbatt.core.gyrostat`), at ``st[ST_T]``;
+            updated in place.
+        st, cnt, f0 : per-trajectory integrator state (:func:`new_state`); updated in place.
+        t_out : (N,) increasing output times, all after ``st[ST_T]``.
+        rec_t, out_y : outputs. Default mode: ``out_y[i]`` (N, ncomp) receives ``y(t_out[i])``
+            (``rec_t`` unused). ``record_all``: every accepted step appends its time to
+            ``rec_t`` and its state to ``out_y`` (capacity ``len(rec_t)``; returns
+            :data:`BUFFER_FULL` when full); integration stops at ``t_out[-1]``.
+        inertia : (3,) principal moments.
+        terms, params, table, work : the model (:mod:`orbatt.core.model`) and its scratch.
+        rtol, atol, max_step : tolerances (scipy's meaning) and the largest step allowed.
+        max_steps : limit on step attempts (accepted + rejected) over the whole run.
+        budget : step attempts allowed in this call.
+
+        Returns a status code (:data:`DONE`, :data:`PAUSED`, ...).
+        """
+        ncomp = width if width > 0 else y.shape[0]
+        nout = t_out.shape[0]
+        Kown = np.empty((N_STAGES + 1, ncomp))
+        tmpown = np.empty((2, ncomp))
+        K = borrow(Kown)
+        ytmp = borrow(tmpown[0])
+        ynew = borrow(tmpown[1])
+        y = borrow(y)
+        f0 = borrow(f0)
+        inertia = borrow(inertia)
+        terms = borrow(terms)
+        params = borrow(params)
+        table = borrow(table)
+        work = borrow(work)
+        t = st[ST_T]
+        h = st[ST_H]
+        facold = st[ST_FACOLD]
+        if facold <= 0.0:
+            facold = 1.0e-4
+        i_out = cnt[CNT_IOUT]
+        flags = cnt[CNT_FLAGS]
+        status = DONE
+        if i_out >= nout:
+            return DONE
+        if (flags & FLAG_F0_VALID) == 0:
+            rhs(t, y, inertia, terms, params, table, work, f0)
             cnt[CNT_NFEV] += 1
-            ok = True
-            for i in range(NDIM):
-                if not (abs(K[N_STAGES, i]) < np.inf):
-                    ok = False
-            if not ok:
+            flags |= FLAG_F0_VALID
+        for i in range(ncomp):
+            K[0, i] = f0[i]
+        if h <= 0.0:
+            h = _initial_step(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
+                              min(max_step, t_out[nout - 1] - t))
+            cnt[CNT_NFEV] += 1
+            if not (h > 0.0 and h < np.inf):
+                h = 1e-6 * max(1.0, abs(t_out[nout - 1] - t))
+        reject = (flags & FLAG_REJECTED) != 0
+        attempts = 0
+        # step-size floor: 10 ulps of the largest time involved (Hairer's test uses |t| only,
+        # which lets a run starting at t = 0 crawl with steps of 1e-300)
+        hmin = 10.0 * EPS * max(abs(t), abs(t_out[nout - 1]))
+        aQ = atol * momentum_scale(inertia)
+        cap = rec_t.shape[0]
+        while i_out < nout:
+            if record_all and cnt[CNT_NREC] >= cap:
+                status = BUFFER_FULL
+                break
+            t_next = t_out[i_out]
+            status, hh, landing = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags)
+            if status != DONE:
+                break
+            # --- the 12 stages
+            for s in range(1, N_STAGES):
+                for i in range(ncomp):
+                    ytmp[i] = 0.0
+                for jj in range(A_PTR[s], A_PTR[s + 1]):
+                    a = A_VAL[jj]
+                    j = A_COL[jj]
+                    for i in range(ncomp):
+                        ytmp[i] += a * K[j, i]
+                for i in range(ncomp):
+                    ytmp[i] = y[i] + hh * ytmp[i]
+                rhs_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
+            cnt[CNT_NFEV] += N_STAGES - 1
+            # --- 8th-order solution and error estimate
+            e5 = 0.0
+            e3 = 0.0
+            for i in range(ncomp):
+                acc = 0.0
+                a5 = 0.0
+                a3 = 0.0
+                for j in range(N_STAGES):
+                    kji = K[j, i]
+                    acc += B[j] * kji
+                    a5 += E5[j] * kji
+                    a3 += E3[j] * kji
+                ynew[i] = y[i] + hh * acc
+                isk = 1.0 / ((atol if i < 4 else aQ) + rtol * max(abs(y[i]), abs(ynew[i])))
+                a5 *= isk
+                a3 *= isk
+                e5 += a5 * a5
+                e3 += a3 * a3
+            err = error_norm(e5, e3, hh, ncomp)
+            attempts += 1
+            if not (err < np.inf):  # NaN or inf: shrink hard and retry
                 flags, h = reject_nonfinite(cnt, flags, hh)
                 reject = True
                 continue
-            flags &= ~FLAG_NONFINITE
-            facold = max(err, 1.0e-4)
-            cnt[CNT_STEPS] += 1
-            t = t_new
-            for i in range(NDIM):
-                y[i] = ynew[i]
-                K[0, i] = K[N_STAGES, i]
-            hnew = next_after_accept(hnew, hh, h, max_step, reject, landing)
-            reject = False
-            if landing:
-                if not record_all:
-                    for i in range(NDIM):
-                        out_y[i_out, i] = y[i]
-                i_out += 1
-            if record_all:
-                n = cnt[CNT_NREC]
-                rec_t[n] = t
-                for i in range(NDIM):
-                    out_y[n, i] = y[i]
-                cnt[CNT_NREC] = n + 1
-            h = hnew
-        else:
-            cnt[CNT_REJECTED] += 1
-            flags &= ~FLAG_NONFINITE
-            reject = True
-            h = next_after_reject(hh, fac11)
-    st[ST_T] = t
-    st[ST_H] = h
-    st[ST_FACOLD] = facold
-    for i in range(NDIM):
-        f0[i] = K[0, i]
-    flags = (flags & ~FLAG_REJECTED) | (FLAG_REJECTED if reject else 0)
-    cnt[CNT_FLAGS] = flags
-    cnt[CNT_IOUT] = i_out
-    keepalive(Kown)
-    keepalive(tmpown)
-    return status
+            fac11, hnew = controller(err, facold, hh)
+            if err <= 1.0:
+                # accepted: FSAL derivative at the new point
+                t_new = t_next if landing else t + hh
+                rhs(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
+                cnt[CNT_NFEV] += 1
+                ok = True
+                for i in range(ncomp):
+                    if not (abs(K[N_STAGES, i]) < np.inf):
+                        ok = False
+                if not ok:
+                    flags, h = reject_nonfinite(cnt, flags, hh)
+                    reject = True
+                    continue
+                flags &= ~FLAG_NONFINITE
+                facold = max(err, 1.0e-4)
+                cnt[CNT_STEPS] += 1
+                t = t_new
+                for i in range(ncomp):
+                    y[i] = ynew[i]
+                    K[0, i] = K[N_STAGES, i]
+                hnew = next_after_accept(hnew, hh, h, max_step, reject, landing)
+                reject = False
+                if landing:
+                    if not record_all:
+                        for i in range(ncomp):
+                            out_y[i_out, i] = y[i]
+                    i_out += 1
+                if record_all:
+                    nrec = cnt[CNT_NREC]
+                    rec_t[nrec] = t
+                    for i in range(ncomp):
+                        out_y[nrec, i] = y[i]
+                    cnt[CNT_NREC] = nrec + 1
+                h = hnew
+            else:
+                cnt[CNT_REJECTED] += 1
+                flags &= ~FLAG_NONFINITE
+                reject = True
+                h = next_after_reject(hh, fac11)
+        st[ST_T] = t
+        st[ST_H] = h
+        st[ST_FACOLD] = facold
+        for i in range(ncomp):
+            f0[i] = K[0, i]
+        flags = (flags & ~FLAG_REJECTED) | (FLAG_REJECTED if reject else 0)
+        cnt[CNT_FLAGS] = flags
+        cnt[CNT_IOUT] = i_out
+        keepalive(Kown)
+        keepalive(tmpown)
+        return status
+
+    return jit(advance)
 
 
-@jit_parallel
-def advance_batch(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK,
-                  rtol, atol, max_step, max_steps, budget):
-    """:func:`advance` for an ensemble, in parallel over members (numba ``prange``).
+#: the step loop of the rigid body, ``y = (q, Q)``
+advance = _advance_of(NDIM)
+#: the step loop of a state of any width (the gyrostat's ``(q, Q, h)``: one axial momentum per
+#: reaction wheel); compiled on first use only
+advance_wide = _advance_of(0)
 
-    ``Y (E, 8)``, ``ST (E, ST_SIZE)``, ``CNT (E, CNT_SIZE)``, ``F0 (E, 8)``, ``WORK (E, w)``
-    and ``inertia (E, 3)`` are per member; ``out_y (E, N, 8)``; ``status (E,)`` receives each
-    member's status (members already :data:`DONE` are skipped). Every member runs exactly the
-    code of :func:`advance`, so its result is identical to a one-by-one propagation.
-    """
-    E = Y.shape[0]
-    rec_t = np.empty(0)
-    for e in nb.prange(E):
-        if CNT[e, CNT_IOUT] >= t_out.shape[0]:
-            status[e] = DONE
-            continue
-        status[e] = advance(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
-                            terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
+
+def _batch_of(advance_one):
+    """The ensemble driver over members of the one-trajectory loop ``advance_one``."""
+
+    def advance_batch(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK,
+                      rtol, atol, max_step, max_steps, budget):
+        """:func:`advance` (or :func:`advance_wide` for :data:`advance_batch_wide`) for an
+        ensemble, in parallel over members (numba ``prange``).
+
+        ``Y (E, n)``, ``ST (E, ST_SIZE)``, ``CNT (E, CNT_SIZE)``, ``F0 (E, n)``, ``WORK (E, w)``
+        and ``inertia (E, 3)`` are per member; ``out_y (E, N, n)``; ``status (E,)`` receives
+        each member's status (members already :data:`DONE` are skipped). Every member runs
+        exactly the code of the one-trajectory loop, so its result is identical to a
+        one-by-one propagation.
+        """
+        E = Y.shape[0]
+        rec_t = np.empty(0)
+        for e in nb.prange(E):
+            if CNT[e, CNT_IOUT] >= t_out.shape[0]:
+                status[e] = DONE
+                continue
+            status[e] = advance_one(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
+                                    terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
+
+    return jit_parallel(advance_batch)
+
+
+advance_batch = _batch_of(advance)
+advance_batch_wide = _batch_of(advance_wide)

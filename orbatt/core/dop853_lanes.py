@@ -146,7 +146,7 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
                 e3[l] += a3 * a3
         err = 0.0
         for l in range(nl):
-            el = error_norm(e5[l], e3[l], hh)
+            el = error_norm(e5[l], e3[l], hh, NDIM)
             if not (el < np.inf):
                 err = np.inf
                 bad_lane = l
