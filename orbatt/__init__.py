@@ -19,6 +19,7 @@ from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to
 from .orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from .potentials import GravityGradient
 from .torques import EnvironmentTorques, Facet
+from .control import BDotControl, PDControl, ReactionWheel
 from .sweep import Sweep, load_sweep, run_sweep
 from .version import __version__
 
@@ -27,7 +28,7 @@ __all__ = [
     "Method", "METHODS", "methods", "register", "Problem", "ProgressInfo",
     "OrbattError", "InputError", "IntegrationError", "ScenarioError",
     "quaternion", "canonical", "euler", "__version__",
-    "KeplerOrbit", "ReboundOrbit", "TleOrbit", "GravityGradient", "EnvironmentTorques", "Facet", "orbital",
+    "KeplerOrbit", "ReboundOrbit", "TleOrbit", "GravityGradient", "EnvironmentTorques", "Facet", "ReactionWheel", "PDControl", "BDotControl", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
     "to_dataset", "open_dataset", "write_aem", "read_aem",
     "Sweep", "SweepError", "load_sweep", "run_sweep",

@@ -5,6 +5,7 @@ import numpy as np
 from astropy import units as u
 
 from . import units as U
+from .control import MAX_WHEELS, ReactionWheel
 from .errors import InputError
 
 
@@ -58,6 +59,28 @@ def _numbers(values):
     return "[" + ", ".join(f"{float(v):.7g}" for v in values) + "]"
 
 
+def _check_wheels(wheels, inertia, dimensionless):
+    """The wheels as a tuple, checked: ReactionWheel objects of a dimensional body, at most
+    :data:`~orbatt.control.MAX_WHEELS`, leaving ``J = diag(I) - sum Iw a a^T`` positive
+    definite."""
+    wheels = tuple(wheels or ())
+    if not wheels:
+        return ()
+    if not all(isinstance(w, ReactionWheel) for w in wheels):
+        raise InputError("wheels: expected a list of orbatt.ReactionWheel")
+    if dimensionless:
+        raise InputError("wheels: reaction wheels need a dimensional body (inertia with units)")
+    if len(wheels) > MAX_WHEELS:
+        raise InputError(f"wheels: {len(wheels)} wheels, more than {MAX_WHEELS}")
+    J = np.diag(inertia) - sum(w.inertia * np.outer(w.axis, w.axis) for w in wheels)
+    low = float(np.linalg.eigvalsh(J).min())
+    if not low > 0:
+        raise InputError(f"wheels: the rotors' axial moments leave the body without inertia about an axis "
+                         f"(smallest moment of J = I - sum Iw a a^T: {low * 1e6:.4g} kg m^2); check the wheels' "
+                         "inertia (kg m^2) against [body] inertia")
+    return wheels
+
+
 class RigidBody:
     """A rigid body given by its principal moments of inertia ``(I1, I2, I3)``.
 
@@ -68,14 +91,20 @@ class RigidBody:
         u.km**2``) makes a dimensional problem (internal unit kg km^2, time in s); three
         plain numbers make a dimensionless one (like the paper's Sect. 6.1).
 
+    wheels : sequence of orbatt.ReactionWheel, optional
+        Reaction wheels (dimensional bodies only): the body becomes a gyrostat
+        (:mod:`orbatt.control`); ``inertia`` is then that of the whole spacecraft with the
+        rotors locked.
+
     Raises
     ------
     InputError
         Wrong shape, non-finite or non-positive moments, or moments violating the triangle
-        inequality ``Ii + Ij >= Ik`` (no physical body has them).
+        inequality ``Ii + Ij >= Ik`` (no physical body has them); wheels whose axial moments
+        leave the body without inertia about an axis.
     """
 
-    def __init__(self, inertia):
+    def __init__(self, inertia, wheels=()):
         self.dimensionless = not isinstance(inertia, (u.Quantity, str))
         if not self.dimensionless:
             if isinstance(inertia, str):
@@ -91,6 +120,21 @@ class RigidBody:
         check_triangle(value)
         self._value = value
         self._value.flags.writeable = False
+        self.wheels = _check_wheels(wheels, value, self.dimensionless)
+
+    @property
+    def rotor_momentum(self):
+        """``sum Iw_k speed_k a_k`` (kg km^2/s, body axes): the rotors' momentum relative to
+        the body at the start (0 without wheels)."""
+        h = np.zeros(3)
+        for w in self.wheels:
+            h += w.inertia * w.speed_rad_s * w.axis
+        return h
+
+    def wheel_momenta(self, omega):
+        """The wheels' axial momenta ``Iw_k (a_k . omega + speed_k)`` (kg km^2/s) for the body
+        rate ``omega`` (rad/s, body axes) and the wheels' initial speeds."""
+        return np.array([w.inertia * (float(np.dot(w.axis, omega)) + w.speed_rad_s) for w in self.wheels])
 
     @property
     def inertia_value(self):
@@ -130,7 +174,7 @@ class RigidBody:
 
     def __eq__(self, other):
         return (isinstance(other, RigidBody) and self.dimensionless == other.dimensionless
-                and np.array_equal(self._value, other._value))
+                and np.array_equal(self._value, other._value) and self.wheels == other.wheels)
 
     def __hash__(self):
-        return hash((self.dimensionless, self._value.tobytes()))
+        return hash((self.dimensionless, self._value.tobytes(), tuple(self.wheels)))

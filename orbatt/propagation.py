@@ -32,7 +32,8 @@ import numpy as np
 from .errors import InputError, IntegrationError
 from .methods import METHODS, Method, methods, register
 from .methods.base import resolve_method
-from .methods.problem import (DEFAULT_MAX_STEPS, MIN_RTOL, Problem, bodies_of, initial_states, kernel_spec,
+from .methods.problem import (DEFAULT_MAX_STEPS, MIN_RTOL, Problem, bodies_of, check_extended, initial_states,
+                              kernel_spec,
                               method_settings, output_times, time_span)
 from .progress import ProgressInfo, progress_callback
 from .trajectory import Trajectory
@@ -108,6 +109,7 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     y0, inertia, state_ensemble = initial_states(state0, bodies)
     ensemble = body_ensemble or state_ensemble
     kernel = kernel_spec(potential, bodies)
+    check_extended(cls, kernel)
     t0, t_end, tv = time_span(t, t_span, bodies[0], potential)
     rtol, atol, stepv, max_steps = method_settings(cls, rtol, atol, step, max_steps, bodies[0])
     progress = progress_callback(progress)
@@ -127,7 +129,8 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
         if not ensemble:
             Y = Y[0]
         return Trajectory(body=bodies[0], potential=potential, t=np.array(tt, dtype=np.float64),
-                          q=np.ascontiguousarray(Y[..., :4]), Q=np.ascontiguousarray(Y[..., 4:]),
+                          q=np.ascontiguousarray(Y[..., :4]), Q=np.ascontiguousarray(Y[..., 4:8]),
+                          wheel_momenta=np.ascontiguousarray(Y[..., 8:]) if Y.shape[-1] > 8 else None,
                           inertia=inertia if body_ensemble else inertia[0].copy(), method=m.name,
                           settings=m.settings(), stats=stats, complete=complete)
 

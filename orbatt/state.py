@@ -75,11 +75,15 @@ class State:
     @classmethod
     def from_omega(cls, body: RigidBody, q, omega):
         """From the attitude and the body angular velocity ``omega`` (body components;
-        rad/s Quantity, or plain numbers for a dimensionless body)."""
+        rad/s Quantity, or plain numbers for a dimensionless body). For a body with reaction
+        wheels, ``Q`` holds the total momentum ``g = I omega + sum Iw speed a`` (the wheels'
+        initial speeds)."""
         q = unit_quaternion(q)
         w = U.strip(omega, body.rate_unit, "omega", allow_plain=body.dimensionless)
         if w.shape[-1:] != (3,):
             raise InputError(f"omega: expected 3 body-axis components, got shape {w.shape}")
+        if body.wheels:  # a gyrostat: g = I omega + the rotors' relative momentum
+            return cls(body, q, cn.momentum_from_body_momentum(q, body.inertia_value * w + body.rotor_momentum))
         return cls(body, q, cn.momentum_from_omega(q, w, body.inertia_value))
 
     @classmethod
@@ -114,7 +118,10 @@ class State:
 
     @property
     def omega(self):
-        """Body angular velocity (body components, rad per time unit)."""
+        """Body angular velocity (body components, rad per time unit); for a body with
+        reaction wheels ``I^-1 (g - sum Iw speed a)`` with the wheels' initial speeds."""
+        if self.body.wheels:
+            return (self.g - self.body.rotor_momentum) / self.body.inertia_value
         return cn.body_rate(self.q, self.Q, self.body.inertia_value)
 
     @property

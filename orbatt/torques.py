@@ -25,6 +25,7 @@ from .core import potentials as kp
 from .environment import sun as esun
 from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
 from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sample_along_orbit, tabulate
+from .control import BDotControl, PDControl
 from .errors import InputError
 from .orbits.base import OrbitProvider
 from .potentials import Potential
@@ -132,6 +133,10 @@ class EnvironmentTorques(Potential):
         ``field(t, r)``, :mod:`orbatt.environment.magnetic`): ``tau = m x B``.
     t_start : Quantity (time)
         The start of the sampled span (default 0).
+    control : PDControl or BDotControl, optional
+        A control law in the loop (:mod:`orbatt.control`): B-dot reads ``magnetic_field``; a
+        PD law pointing at the Sun needs the orbit's epoch. Its torque is not a term of
+        ``torque``: a Dataset records it as ``torque_control`` (and ``dipole_control``).
     """
 
     name = "environment"
@@ -139,7 +144,7 @@ class EnvironmentTorques(Potential):
 
     def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
                  residual_dipole=None, atmosphere=None, magnetic_field=None, shadow="conical", corotation=True,
-                 t_start=0.0 * u.s):
+                 t_start=0.0 * u.s, control=None):
         if not isinstance(orbit, OrbitProvider):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got {type(orbit).__name__}")
         self.orbit = orbit
@@ -173,6 +178,13 @@ class EnvironmentTorques(Potential):
         self.residual_dipole = dip
         self.atmosphere, self.magnetic_field = atmosphere, magnetic_field
         self.shadow, self.corotation = shadow, bool(corotation)
+        if control is not None and not isinstance(control, (PDControl, BDotControl)):
+            raise InputError(f"control: expected orbatt.PDControl or orbatt.BDotControl, got {type(control).__name__}")
+        if isinstance(control, BDotControl) and magnetic_field is None:
+            raise InputError("magnetic_field: B-dot control needs a field model (igrf or dipole)")
+        if isinstance(control, PDControl) and control.target == "sun" and epoch is None:
+            raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
+        self.control = control
         self.span = (t0, t1)
         self.kind, self.params, self.table = orbit.kernel()
         self._model = None
@@ -216,6 +228,17 @@ class EnvironmentTorques(Potential):
         self.term_kinds = [r[0] for r in rows]
         self._model = km.build(orbit=orbit_row, terms=rows)
         return self._model
+
+    def control_row(self, wheels):
+        """The model row of the control law (:mod:`orbatt.control`) for a body with ``wheels``,
+        with the field it reads sampled along the orbit."""
+        if isinstance(self.control, BDotControl):
+            s = self._samples(MAGNETIC_FIELD_STEP)
+            return self.control.row(tabulate(s, self.magnetic_field.field))
+        sun = None
+        if self.control.target == "sun":
+            sun = tabulate(self._samples(SUN_STEP), lambda t, r: esun.sun_position(t))
+        return self.control.row(wheels, sun)
 
     @property
     def time_span(self):
@@ -280,6 +303,8 @@ class EnvironmentTorques(Potential):
             d["atmosphere"] = repr(self.atmosphere)
         if self.magnetic_field is not None:
             d["magnetic_field"] = repr(self.magnetic_field)
+        if self.control is not None:
+            d["control"] = self.control.describe()
         return d
 
     def __repr__(self):

@@ -35,6 +35,8 @@ class Trajectory:
     complete : bool
         False if the run was interrupted (KeyboardInterrupt): ``t, q, Q`` then hold what was
         computed.
+    wheel_momenta : ndarray (N, n) or (E, N, n), or None
+        The reaction wheels' axial momenta ``h`` (kg km^2/s) of a body with wheels.
     """
 
     body: RigidBody
@@ -47,6 +49,7 @@ class Trajectory:
     settings: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
     complete: bool = True
+    wheel_momenta: np.ndarray = None
 
     @property
     def orbit(self):

@@ -29,6 +29,9 @@ ENERGY = u.kg * u.km**2 / u.s**2
 RATE = u.rad / u.s
 GM = u.km**3 / u.s**2
 DIMENSIONLESS = u.dimensionless_unscaled
+#: revolutions per minute (reaction-wheel speeds, ``"1000 rpm"``), enabled in astropy's parser
+RPM = u.def_unit("rpm", u.cycle / u.min, doc="revolutions per minute")
+u.add_enabled_units([RPM])
 
 #: CF/UDUNITS unit spellings orbatt writes, with the astropy unit each one parses to. Exponents
 #: are spelled with ``^`` (``"kg km^2 s^-1"``): astropy, UDUNITS-2 (the CF unit library) and

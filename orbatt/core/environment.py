@@ -175,6 +175,25 @@ def spline_eval(table, t, ncomp, slot, work):
     return v0, v1, v2, v3
 
 
+@jit_inline
+def spline_eval_rate(table, t, slot, work):
+    """``(value, rate)``: the first three components of a spline table at ``t`` and their time
+    derivatives (3-tuples; the derivative of each cubic, continuous across the knots).
+    ``work[slot]`` keeps the interval (:func:`find_row`)."""
+    i = find_row(table, t, work, slot)
+    row = table[i]
+    s = t - row[0]
+    v = (_cubic(row, 0, s), _cubic(row, 1, s), _cubic(row, 2, s))
+    d = (_cubic_rate(row, 0, s), _cubic_rate(row, 1, s), _cubic_rate(row, 2, s))
+    return v, d
+
+
+@jit_inline
+def _cubic_rate(row, k, s):
+    b = 1 + 4 * k
+    return row[b + 1] + s * (2.0 * row[b + 2] + s * 3.0 * row[b + 3])
+
+
 @jit
 def spline_eval_many(table, t, ncomp):
     """:func:`spline_eval` at each time of ``t`` (for outputs and tests): ``(len(t), ncomp)``."""

@@ -37,7 +37,21 @@ gravity gradient       2     ``[GM]``; reads the orbit's ``r`` and radial unit v
 aerodynamic drag       3     :func:`drag_params`: an exponential atmosphere, its rotation rate and
 of flat plates               the facets of :mod:`orbatt.core.torques`; reads the orbit's position
                              and velocity (a torque: ``G = -2 q (0, tau)``)
+solar radiation        4     :func:`srp_params`; table: the Sun's position
+pressure
+magnetic dipole        5     the body's dipole (3); table: the field ``B`` (inertial)
+reaction wheels        6     :func:`orbatt.core.control.wheel_params` (the body is a gyrostat and
+                             the state ``(q, Q, h)``, :mod:`orbatt.core.gyrostat`)
+PD control             7     :func:`orbatt.core.control.pd_params`; table: the Sun's position
+                             (``target = sun``)
+B-dot control          8     ``[gain, max dipole]``; table: the field ``B`` (inertial)
 =====================  ====  =====================================================================
+
+The last three are the **extended** kinds (:data:`EXTENDED_KINDS`): a model holding one gets
+row 0's :data:`EXTENDED` flag, and the right-hand side of :mod:`orbatt.core.hamiltonian`
+hands it to :func:`orbatt.core.gyrostat.rhs_extended` (the wheels' momenta and the body rate
+that the control laws read). :func:`term_value` gives them ``(0, 0)``, so the sums below are
+those of the other terms.
 
 Every term contributes ``(U, G)``: its potential and its generalized gradient, so that the
 momentum equation reads ``dQ/dt = 1/4 Q a - sum G`` (:mod:`orbatt.core.hamiltonian`).
@@ -71,19 +85,27 @@ GRAVITY_GRADIENT = 2
 DRAG = 3
 SRP = 4
 MAGNETIC = 5
+WHEELS = 6
+PD_CONTROL = 7
+BDOT_CONTROL = 8
 
 #: columns of a ``terms`` row
 KIND, P0, P1, R0, R1, FLAGS = 0, 1, 2, 3, 4, 5
 TERM_FIELDS = 6
 #: row 0 ``FLAGS`` bit: a term reads the orbit's velocity
 NEEDS_VELOCITY = 1
+#: row 0 ``FLAGS`` bit: the model has reaction wheels or a control law (the extended
+#: right-hand side of :mod:`orbatt.core.gyrostat`)
+EXTENDED = 2
+#: the kinds that make a model extended: they read the body rate (and the wheels' momenta)
+EXTENDED_KINDS = frozenset({WHEELS, PD_CONTROL, BDOT_CONTROL})
 
 #: terms that read the orbit, those that read its velocity, and those with a table of their
 #: own (an environment field sampled along the orbit; the row's ``FLAGS`` column holds the
 #: slot of ``work`` that keeps its interval)
-ORBIT_TERMS = frozenset({GRAVITY_GRADIENT, DRAG, SRP, MAGNETIC})
-VELOCITY_TERMS = frozenset({DRAG})
-TABLE_TERMS = frozenset({DRAG, SRP, MAGNETIC})
+ORBIT_TERMS = frozenset({GRAVITY_GRADIENT, DRAG, SRP, MAGNETIC, BDOT_CONTROL})
+VELOCITY_TERMS = frozenset({DRAG, PD_CONTROL})
+TABLE_TERMS = frozenset({DRAG, SRP, MAGNETIC, BDOT_CONTROL})
 #: the first slot of ``work`` given to tables (0..2: Kepler's warm start, 3: the sampled
 #: orbit); :data:`orbatt.core.potentials.WORK_SIZE` bounds the number of table terms
 FIRST_TABLE_SLOT = 4
@@ -380,9 +402,13 @@ def build(orbit=None, terms=()):
         raise ValueError("a term that reads the orbit needs an orbit (row 0)")
     if kinds & VELOCITY_TERMS:
         spec[0, FLAGS] |= NEEDS_VELOCITY
+    if kinds & EXTENDED_KINDS:
+        spec[0, FLAGS] |= EXTENDED
+    if sum(1 for k in spec[1:, KIND] if k == WHEELS) > 1:
+        raise ValueError("at most one row of reaction wheels")
     slot = FIRST_TABLE_SLOT
     for row in spec[1:]:
-        if int(row[KIND]) in TABLE_TERMS:
+        if int(row[KIND]) in TABLE_TERMS or (int(row[KIND]) == PD_CONTROL and row[R1] > row[R0]):
             if row[R1] - row[R0] < 2:
                 raise ValueError(f"term kind {int(row[KIND])} needs a spline table of at least 2 rows")
             if slot >= pot.WORK_SIZE:

@@ -106,6 +106,9 @@ class Method:
     symplectic : bool
     compiled : bool
         Whole step loop compiled (False: Python step loop).
+    extended : bool
+        Takes extended models (reaction wheels, control laws: states wider than 8 and
+        right-hand sides that read the body rate); the others refuse them.
     options : dict
         Extra keyword options accepted (name -> description).
     description : str
@@ -132,6 +135,7 @@ class Method:
     adaptive = False
     symplectic = False
     compiled = True
+    extended = False
     options: dict = {}
     description = ""
 

@@ -25,6 +25,7 @@ class DOP853(Method):
     name = "dop853"
     order = 8
     adaptive = True
+    extended = True
     options = {"max_step": "largest step allowed (time unit of the body); default no limit"}
     description = "compiled adaptive Dormand-Prince 8(5,3), Hairer's step-size control"
 
@@ -44,7 +45,11 @@ class DOP853(Method):
         p = problem
         E = p.members
         self.Y = p.y0.copy()
-        self.ST, self.CNT, self.F0 = kd.new_state(E)
+        width = p.y0.shape[1]
+        # the rigid body's loop, or the one for wider states (a gyrostat's wheels)
+        self.one, self.batch = ((kd.advance, kd.advance_batch) if width == kd.NDIM else
+                                (kd.advance_wide, kd.advance_batch_wide))
+        self.ST, self.CNT, self.F0 = kd.new_state(E, width)
         self.ST[:, kd.ST_T] = p.t0
         if self.step is not None:
             self.ST[:, kd.ST_H] = self.step
@@ -55,10 +60,10 @@ class DOP853(Method):
         self.t_k = np.ascontiguousarray(p.t_out[self.n0:])
         if p.step_ends:
             self.rec_t = np.empty(256)
-            self.rec_y = np.empty((256, kd.NDIM))
+            self.rec_y = np.empty((256, width))
             self.n0 = 1
         else:
-            self.out = np.empty((E, self.t_k.shape[0], kd.NDIM))
+            self.out = np.empty((E, self.t_k.shape[0], width))
 
     def advance(self, budget):
         p = self.p
@@ -67,21 +72,21 @@ class DOP853(Method):
             return True
         if p.step_ends:
             while True:
-                st = kd.advance(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.rec_t, self.rec_y,
+                st = self.one(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.rec_t, self.rec_y,
                                 True, p.inertia[0], *p.kernel, self.WORK[0], self.rtol, self.atol,
                                 self.max_step, self.max_steps, budget)
                 if st != kd.BUFFER_FULL:
                     break
                 n = self.rec_t.shape[0]
                 self.rec_t = np.concatenate([self.rec_t, np.empty(n)])
-                self.rec_y = np.concatenate([self.rec_y, np.empty((n, kd.NDIM))])
+                self.rec_y = np.concatenate([self.rec_y, np.empty((n, self.rec_y.shape[1]))])
             self.status[0] = st
         elif p.members == 1 and not p.ensemble:
-            self.status[0] = kd.advance(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.t_k,
+            self.status[0] = self.one(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.t_k,
                                         self.out[0], False, p.inertia[0], *p.kernel, self.WORK[0],
                                         self.rtol, self.atol, self.max_step, self.max_steps, budget)
         else:
-            kd.advance_batch(self.Y, self.ST, self.CNT, self.F0, self.t_k, self.out, self.status, p.inertia,
+            self.batch(self.Y, self.ST, self.CNT, self.F0, self.t_k, self.out, self.status, p.inertia,
                              *p.kernel, self.WORK, self.rtol, self.atol, self.max_step, self.max_steps, budget)
         return self.check_status(self.status)
 
@@ -91,7 +96,7 @@ class DOP853(Method):
     def _grid_outputs(self, counters):
         p = self.p
         n = int(counters[:, kd.CNT_IOUT].min())
-        Y = np.concatenate([np.broadcast_to(p.y0[:, None, :], (p.members, self.n0, kd.NDIM)), self.out[:, :n]], axis=1)
+        Y = np.concatenate([np.broadcast_to(p.y0[:, None, :], (p.members, self.n0, p.y0.shape[1])), self.out[:, :n]], axis=1)
         return p.t_out[:self.n0 + n], Y
 
     def outputs(self):
@@ -115,6 +120,7 @@ class DOP853Lanes(DOP853):
     """DOP853 over an ensemble in lockstep groups (:func:`orbatt.core.dop853.advance_lanes`)."""
 
     name = "dop853-lanes"
+    extended = False
     options = {"max_step": DOP853.options["max_step"],
                "lanes": "members per lockstep group (default 32)"}
     description = ("compiled DOP853 for ensembles: groups of members share the step size and the orbit "

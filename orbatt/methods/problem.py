@@ -11,14 +11,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import canonical as cn
 from .. import units as U
 from ..body import RigidBody
+from ..control import extend_model, wheels_row
 from ..core import model as km
 from ..core.dop853 import NDIM
 from ..errors import InputError
 from ..state import State
 
-__all__ = ["Problem", "KernelSpec", "kernel_spec", "bodies_of", "initial_states", "time_span", "method_settings",
+__all__ = ["Problem", "KernelSpec", "kernel_spec", "check_extended", "bodies_of", "initial_states", "time_span", "method_settings",
            "output_times", "DEFAULT_MAX_STEPS", "MIN_RTOL", "MAX_RTOL", "MAX_ATOL"]
 
 #: default limit on step attempts (per ensemble member)
@@ -139,6 +141,16 @@ def initial_states(state0, bodies):
     y0 = np.ascontiguousarray(np.broadcast_to(y, (E, NDIM)), dtype=np.float64).copy()
     inertia = np.ascontiguousarray(np.broadcast_to(np.array([b.inertia_value for b in bodies]), (E, 3)),
                                    dtype=np.float64).copy()
+    wheels = b0.wheels
+    if any(b.wheels != wheels for b in bodies):
+        raise InputError("body: the members of an ensemble must have the same reaction wheels")
+    if state0.body.wheels != wheels:
+        raise InputError("state0: built for a body with other reaction wheels than body (Q holds the wheels' "
+                         "momentum); build it with State.from_omega(body, ...)")
+    if wheels:  # the gyrostat's state (q, Q, h): the wheels' axial momenta from the body rate
+        g = cn.body_momentum(y0[:, :4], y0[:, 4:])
+        omega = (g - b0.rotor_momentum) / inertia
+        y0 = np.ascontiguousarray(np.hstack([y0, np.array([b0.wheel_momenta(w) for w in omega])]))
     return y0, inertia, state_ensemble
 
 
@@ -161,11 +173,27 @@ def kernel_spec(potential, bodies) -> KernelSpec:
     if table.ndim != 2:
         raise InputError(f"potential.table: expected a 2-D array, got shape {table.shape}")
     if hasattr(potential, "kernel_model"):
-        return KernelSpec(*potential.kernel_model())
-    try:
-        return KernelSpec(*km.from_spec(int(potential.kind), params, table))
-    except ValueError as exc:
-        raise InputError(f"potential: {exc}") from None
+        model = potential.kernel_model()
+    else:
+        try:
+            model = km.from_spec(int(potential.kind), params, table)
+        except ValueError as exc:
+            raise InputError(f"potential: {exc}") from None
+    wheels = bodies[0].wheels
+    control = getattr(potential, "control", None)
+    if wheels or control is not None:
+        rows = [wheels_row(wheels)] if wheels else []
+        if control is not None:
+            rows.append(potential.control_row(wheels))
+        model = extend_model(model, rows)
+    return KernelSpec(*model)
+
+
+def check_extended(cls, kernel):
+    """Refuse a method that cannot run an extended model (wheels, control laws)."""
+    if (kernel.terms[0, km.FLAGS] & km.EXTENDED) and not cls.extended:
+        raise InputError(f"method: {cls.name!r} cannot integrate reaction wheels or a control law (the body rate "
+                         "enters the right-hand side, and the wheels' momenta the state); use method = 'dop853'")
 
 
 def _times(value, name, body):

@@ -22,6 +22,7 @@ class Scipy(Method):
     name in :mod:`scipy.integrate`)."""
 
     compiled = False
+    extended = True
     solver = "DOP853"
     options = {"max_step": "largest step (scipy's max_step)"}
 
@@ -44,7 +45,7 @@ class Scipy(Method):
             self.rec_t = [p.t0]
             self.rec_y = [p.y0[0].copy()]
         else:
-            self.out = np.empty((E, p.t_out.shape[0], kd.NDIM))
+            self.out = np.empty((E, p.t_out.shape[0], p.y0.shape[1]))
             n0 = int(np.searchsorted(p.t_out, p.t0, side="right"))
             self.out[:, :n0] = p.y0[:, None, :]
             self.i_out[:] = n0
@@ -54,9 +55,10 @@ class Scipy(Method):
         inertia = np.ascontiguousarray(self.p.inertia[e])
         work = kp.new_work()
         counter = self.nfev
+        width = self.p.y0.shape[1]
 
         def fun(t, y):
-            dy = np.empty(kd.NDIM)
+            dy = np.empty(width)
             rhs(t, np.ascontiguousarray(y, dtype=np.float64), inertia, *kernel, work, dy)
             counter[e] += 1
             return dy
@@ -66,7 +68,7 @@ class Scipy(Method):
     def _new_solver(self, e, t_bound):
         # the same error norm as the compiled DOP853: atol on q, atol * max(I) on Q
         aQ = self.atol * float(np.max(self.p.inertia[e]))
-        kw = {"rtol": self.rtol, "atol": np.array([self.atol] * 4 + [aQ] * 4)}
+        kw = {"rtol": self.rtol, "atol": np.array([self.atol] * 4 + [aQ] * (self.p.y0.shape[1] - 4))}
         if "max_step" in self.opts:
             kw["max_step"] = float(self.opts["max_step"])
         h = self.h_last[e]

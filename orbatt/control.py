@@ -1,0 +1,261 @@
+"""Attitude control and reaction wheels, with units at the boundary (kernels in
+:mod:`orbatt.core.control` and :mod:`orbatt.core.gyrostat`; physics in ``DESIGN.md`` §10).
+
+* :class:`ReactionWheel`: a rotor of the body (``RigidBody(..., wheels=[...])``), which makes it
+  a gyrostat: the state becomes ``(q, Q, h)`` with ``h`` the rotors' axial momenta, and
+  ``g = 1/2 Im(q~ Q)`` is the **total** angular momentum. The body's ``inertia`` is that of
+  the whole spacecraft with the rotors locked.
+* :class:`PDControl`: quaternion feedback towards the orbital frame, an inertial attitude or
+  the Sun, made by an ideal actuator or by the wheels.
+* :class:`BDotControl`: B-dot detumbling with magnetorquers.
+
+A control law acts through :class:`orbatt.EnvironmentTorques` (``control=``), which holds the
+orbit and samples the fields the law reads (the Sun, the magnetic field). Rate-dependent laws
+need an adaptive method (``dop853`` or scipy's); wheels too (their state is integrated).
+"""
+from __future__ import annotations
+
+import numpy as np
+from astropy import units as u
+
+from . import units as U
+from .core import control as kc
+from .core import model as km
+from .errors import InputError
+
+__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row",
+           "extend_model"]
+
+#: a wheel axis or a Sun-pointing axis must have |a| = 1 within this
+AXIS_TOLERANCE = 1e-6
+#: most reaction wheels of a body
+MAX_WHEELS = 16
+#: PD targets and actuators by name
+TARGETS = {"orbital": kc.TARGET_ORBITAL, "inertial": kc.TARGET_INERTIAL, "sun": kc.TARGET_SUN}
+ACTUATORS = ("ideal", "wheels")
+#: torques: N m -> kg km^2 s^-2; dipoles: A m^2 -> the internal 1e-6 A m^2 (m x B in T then
+#: gives kg km^2 s^-2); inertia kg m^2 -> kg km^2
+_N_M = 1e-6
+
+
+def _value(x, unit, name, *, positive=False, nonnegative=False, allow_none=False):
+    """A float of ``x`` (Quantity or string) in ``unit``, checked; None passes if allowed."""
+    if x is None:
+        if allow_none:
+            return None
+        raise InputError(f"{name}: required")
+    if isinstance(x, str):
+        try:
+            x = u.Quantity(x)
+        except (TypeError, ValueError):
+            raise InputError(f"{name}: cannot parse {x!r} as a quantity, e.g. '1 {unit.to_string()}'") from None
+    if not isinstance(x, u.Quantity):
+        raise InputError(f"{name}: {x!r} needs a unit, e.g. {x} {unit.to_string()}")
+    try:
+        v = float(x.to_value(unit))
+    except u.UnitConversionError:
+        raise InputError(f"{name}: {x} has the wrong dimension; expected {unit.physical_type} "
+                         f"such as '1 {unit.to_string()}'") from None
+    except TypeError:
+        raise InputError(f"{name}: expected one value, got {x}") from None
+    if not np.isfinite(v):
+        raise InputError(f"{name}: {x} is not finite")
+    if positive and not v > 0:
+        raise InputError(f"{name}: {x} must be positive")
+    if nonnegative and not v >= 0:
+        raise InputError(f"{name}: {x} must not be negative")
+    return v
+
+
+def _unit_vector(v, name):
+    a = np.asarray(v, dtype=np.float64)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise InputError(f"{name}: expected 3 finite components, got {v!r}")
+    n = float(np.linalg.norm(a))
+    if abs(n - 1.0) > AXIS_TOLERANCE:
+        raise InputError(f"{name}: {a.tolist()} is not a unit vector (|a| = {n:.9g}); give it normalized")
+    return a / n
+
+
+class ReactionWheel:
+    """A reaction wheel: a symmetric rotor spinning about a body axis.
+
+    Parameters
+    ----------
+    axis : 3 floats
+        Unit spin axis (body axes).
+    inertia : Quantity (mass x length^2)
+        Axial moment of the rotor (e.g. ``4e-5 kg m^2``).
+    speed : Quantity (angular velocity), optional
+        Rotor speed relative to the body at the start (``"1000 rpm"``; default 0).
+    max_torque : Quantity (N m), optional
+        Motor torque limit (default: none).
+    max_speed : Quantity (angular velocity), optional
+        Speed limit: the motor does not push the rotor beyond it (default: none).
+    """
+
+    def __init__(self, axis, inertia, speed=0.0 * u.rad / u.s, *, max_torque=None, max_speed=None, name=None):
+        self.axis = _unit_vector(axis, "axis")
+        self.inertia_kg_m2 = _value(inertia, u.kg * u.m**2, "inertia", positive=True)
+        self.speed_rad_s = _value(speed, u.rad / u.s, "speed")
+        self.max_torque_n_m = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
+        self.max_speed_rad_s = _value(max_speed, u.rad / u.s, "max_speed", positive=True, allow_none=True)
+        if self.max_speed_rad_s is not None and abs(self.speed_rad_s) > self.max_speed_rad_s:
+            raise InputError(f"speed: {self.speed_rad_s:.6g} rad/s is above max_speed = {self.max_speed_rad_s:.6g} "
+                             "rad/s; lower the initial speed or raise max_speed")
+        self.name = name
+
+    @property
+    def inertia(self):
+        """Axial moment of the rotor (kg km^2, the internal unit)."""
+        return self.inertia_kg_m2 * 1e-6
+
+    def describe(self):
+        return {"axis": self.axis.tolist(), "inertia_kg_m2": self.inertia_kg_m2, "speed_rad_s": self.speed_rad_s,
+                "max_torque_N_m": self.max_torque_n_m, "max_speed_rad_s": self.max_speed_rad_s}
+
+    def _key(self):
+        return (tuple(self.axis), self.inertia_kg_m2, self.speed_rad_s, self.max_torque_n_m, self.max_speed_rad_s)
+
+    def __eq__(self, other):
+        return isinstance(other, ReactionWheel) and self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def __repr__(self):
+        return (f"ReactionWheel(axis={self.axis.tolist()}, inertia={self.inertia_kg_m2:.4g} kg m^2, "
+                f"speed={self.speed_rad_s:.6g} rad/s)")
+
+
+def wheels_row(wheels):
+    """The :data:`~orbatt.core.model.WHEELS` row ``(kind, params, None)`` of a list of wheels
+    (internal units)."""
+    inf = np.inf
+    return (km.WHEELS, kc.wheel_params(
+        [w.axis for w in wheels], [w.inertia for w in wheels],
+        [inf if w.max_torque_n_m is None else w.max_torque_n_m * _N_M for w in wheels],
+        [inf if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels]), None)
+
+
+class PDControl:
+    """Quaternion PD feedback: ``tau = -kp sgn(q_e0) Im(q_e) - kd (omega - omega_t)``, each axis
+    clipped to ``max_torque`` (``q_e = q_t~ q``; targets and actuators in
+    :mod:`orbatt.core.control`).
+
+    Parameters
+    ----------
+    target : {"orbital", "inertial", "sun"}
+        Hold the body axes on the orbital frame O (``q_orbital`` -> identity), on the attitude
+        ``target_q`` (inertial, scalar first), or point the body axis ``target_axis`` at the Sun
+        (needs the orbit's epoch).
+    kp : Quantity (N m)
+        Torque per unit quaternion error.
+    kd : Quantity (N m s)
+        Torque per unit rate error (rad/s).
+    max_torque : Quantity (N m), optional
+        Per-axis saturation of the commanded torque.
+    actuator : {"ideal", "wheels"}
+        An ideal external torque, or the body's reaction wheels (their axes must span three
+        dimensions; their limits apply).
+    """
+
+    law = "pd"
+
+    def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
+                 target_axis=None):
+        if target not in TARGETS:
+            raise InputError(f"target: {target!r} is not one of {', '.join(map(repr, TARGETS))}")
+        if actuator not in ACTUATORS:
+            raise InputError(f"actuator: {actuator!r} is not one of 'ideal', 'wheels'")
+        self.target, self.actuator = target, actuator
+        self.kp = _value(kp, u.N * u.m, "kp", nonnegative=True)
+        self.kd = _value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
+        self.max_torque = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
+        self.target_q = self.target_axis = None
+        if target == "inertial":
+            if target_q is None:
+                raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
+            tq = np.asarray(target_q, dtype=np.float64)
+            if tq.shape != (4,) or not np.all(np.isfinite(tq)) or abs(np.linalg.norm(tq) - 1) > AXIS_TOLERANCE:
+                raise InputError(f"target_q: {target_q!r} is not a unit quaternion [w, x, y, z]")
+            self.target_q = tq / np.linalg.norm(tq)
+        elif target_q is not None:
+            raise InputError(f"target_q: only for target = 'inertial' (target is {target!r})")
+        if target == "sun":
+            if target_axis is None:
+                raise InputError("target_axis: target = 'sun' needs the body axis to point at the Sun, e.g. [0, 0, 1]")
+            self.target_axis = _unit_vector(target_axis, "target_axis")
+        elif target_axis is not None:
+            raise InputError(f"target_axis: only for target = 'sun' (target is {target!r})")
+
+    def row(self, wheels, sun_table=None):
+        """The :data:`~orbatt.core.model.PD_CONTROL` row for a body with ``wheels`` (internal
+        units); ``sun_table``: the Sun's position along the orbit (``target = sun``)."""
+        tmax = np.inf if self.max_torque is None else self.max_torque * _N_M
+        values = (self.target_q if self.target == "inertial" else
+                  self.target_axis if self.target == "sun" else (0.0, 0.0, 0.0, 0.0))
+        axes = None
+        if self.actuator == "wheels":
+            if not wheels:
+                raise InputError("actuator: 'wheels' needs the body's reaction wheels ([[body.wheels]])")
+            axes = np.array([w.axis for w in wheels])
+            if np.linalg.matrix_rank(axes, tol=1e-9) < 3:
+                raise InputError(f"[[body.wheels]] axis: the {len(wheels)} wheel axes {axes.tolist()} do not span "
+                                 "three dimensions, which leaves an axis uncontrollable; add or tilt a wheel")
+        params = kc.pd_params(TARGETS[self.target], self.kp * _N_M, self.kd * _N_M, tmax, values, axes)
+        return (km.PD_CONTROL, params, sun_table)
+
+    def describe(self):
+        d = {"law": "pd", "target": self.target, "kp_N_m": self.kp, "kd_N_m_s": self.kd,
+             "max_torque_N_m": self.max_torque, "actuator": self.actuator}
+        if self.target_q is not None:
+            d["target_q"] = self.target_q.tolist()
+        if self.target_axis is not None:
+            d["target_axis"] = self.target_axis.tolist()
+        return d
+
+    def __repr__(self):
+        return (f"PDControl(target={self.target!r}, kp={self.kp:.4g} N m, kd={self.kd:.4g} N m s, "
+                f"actuator={self.actuator!r})")
+
+
+class BDotControl:
+    """B-dot detumbling: ``m = -gain dB_B/dt`` (body axes, each axis clipped to
+    ``max_dipole``), ``tau = m x B``.
+
+    Parameters
+    ----------
+    gain : Quantity (A m^2 s / T)
+    max_dipole : Quantity (A m^2)
+        The magnetorquers' limit per axis.
+    """
+
+    law = "bdot"
+
+    def __init__(self, gain, max_dipole):
+        self.gain = _value(gain, u.A * u.m**2 * u.s / u.T, "gain", nonnegative=True)
+        self.max_dipole = _value(max_dipole, u.A * u.m**2, "max_dipole", positive=True)
+
+    def row(self, field_table):
+        """The :data:`~orbatt.core.model.BDOT_CONTROL` row with the field along the orbit
+        (T, inertial; a spline table of :mod:`orbatt.core.environment`)."""
+        return (km.BDOT_CONTROL, [self.gain * _N_M, self.max_dipole * _N_M], field_table)
+
+    def describe(self):
+        return {"law": "bdot", "gain_A_m2_s_per_T": self.gain, "max_dipole_A_m2": self.max_dipole}
+
+    def __repr__(self):
+        return f"BDotControl(gain={self.gain:.4g} A m^2 s/T, max_dipole={self.max_dipole:.4g} A m^2)"
+
+
+def extend_model(model, rows):
+    """The model ``(terms, params, table)`` with the rows ``(kind, params, table)`` appended
+    (:func:`orbatt.core.model.build`)."""
+    terms, params, table = model
+
+    def row(j):
+        t = table[terms[j, km.R0]:terms[j, km.R1]] if terms[j, km.R1] > terms[j, km.R0] else None
+        return (int(terms[j, km.KIND]), params[terms[j, km.P0]:terms[j, km.P1]], t)
+
+    return km.build(orbit=row(0), terms=[row(j) for j in range(1, terms.shape[0])] + list(rows))

@@ -1,0 +1,204 @@
+"""Attitude control laws and reaction wheels on plain floats (``DESIGN.md`` §10).
+
+Units are the caller's consistent system (orbatt's internal kg, km, s, rad: torques in
+kg km^2 s^-2 = 1e6 N m, dipoles in 1e-6 A m^2 so that ``m x B`` with ``B`` in T is such a
+torque). Vectors are 3-tuples in **body axes** unless named ``_s`` (inertial).
+
+Parameter layouts (rows of the term list, :mod:`orbatt.core.model`)
+----------------------------------------------------------------
+* reaction wheels (:data:`~orbatt.core.model.WHEELS`): :func:`wheel_params`:
+  ``[n, (a1, a2, a3, Iw, u_max, speed_max) * n]``: unit spin axis, axial moment of the rotor,
+  motor torque limit and speed limit (relative to the body; ``inf``: none).
+* PD control (:data:`~orbatt.core.model.PD_CONTROL`): :func:`pd_params`:
+  ``[target, kp, kd, tau_max, actuator, c0, c1, c2, c3, then for wheels the (n, 3)
+  pseudo-inverse of the (3, n) matrix of spin axes]``; ``c`` is the target quaternion
+  (``target = inertial``) or the body axis to point at the Sun (``target = sun``).
+* B-dot (:data:`~orbatt.core.model.BDOT_CONTROL`): ``[gain, m_max]``.
+
+The PD law (``q_e = q_t~ q``, ``tau = -kp sgn(q_e0) Im(q_e) - kd (omega - omega_t)``, each
+axis clipped to ``tau_max``) with the targets:
+
+* ``orbital``: ``q_t = p``, the orbital frame O of the orbit's ``(r, v)`` (``DESIGN.md`` §1), and
+  ``omega_t = (r x v) / r^2`` in body axes: O's rate about its normal (exact for a Keplerian
+  orbit; its component along ``o1``, from an acceleration off the orbit plane, is left out:
+  below 2e-6 rad/s for J2 in LEO).
+* ``inertial``: a constant ``q_t``, ``omega_t = 0``.
+* ``sun``: ``q_e`` the shortest rotation taking the Sun's direction (body axes) onto the body
+  axis ``b``, ``omega_t = 0`` (the Sun's apparent motion, ~2e-7 rad/s, is left out).
+
+With ``actuator = wheels`` the commanded torque is made by the wheels: motor torques
+``u = -A+ tau`` (each clipped to ``u_max``, and to zero when it would push a wheel past
+``speed_max``); the body feels ``-A u``, an internal torque: the total angular momentum
+does not change. B-dot: ``m = -k dB_B/dt`` (each axis clipped to ``m_max``) with
+``dB_B/dt = q~ dB_S/dt q - omega x B_B``; ``tau = m x B_B``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import jit, jit_inline
+from .qalg import cross, qconj, qmul, rotate_inv
+
+#: PD targets
+TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN = 0, 1, 2
+#: actuators of the PD law
+ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
+#: parameters of a wheel and of the PD law before the wheels' pseudo-inverse
+WHEEL_SIZE = 6
+PD_HEADER = 9
+
+
+def wheel_params(axes, inertia, max_torque, max_speed):
+    """The parameters of a :data:`~orbatt.core.model.WHEELS` row: unit spin axes ``(n, 3)``
+    (body), axial moments ``(n,)``, motor torque limits and speed limits ``(n,)`` (``inf``:
+    none)."""
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 3)
+    cols = [axes, np.asarray(inertia, dtype=np.float64).reshape(-1, 1),
+            np.asarray(max_torque, dtype=np.float64).reshape(-1, 1),
+            np.asarray(max_speed, dtype=np.float64).reshape(-1, 1)]
+    return np.concatenate([[axes.shape[0]], np.hstack(cols).ravel()])
+
+
+def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None):
+    """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
+    :data:`TARGET_ORBITAL`, :data:`TARGET_INERTIAL`, :data:`TARGET_SUN`; ``target_values``:
+    the target quaternion or the body axis (padded to 4); ``wheel_axes (n, 3)``: actuate with
+    these wheels (their axes must span the three dimensions), else an ideal torque."""
+    c = np.zeros(4)
+    tv = np.asarray(target_values, dtype=np.float64).ravel()
+    c[:tv.size] = tv
+    head = [float(target), kp, kd, max_torque, ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, *c]
+    if wheel_axes is None:
+        return np.array(head, dtype=np.float64)
+    A = np.asarray(wheel_axes, dtype=np.float64).reshape(-1, 3).T  # (3, n)
+    if np.linalg.matrix_rank(A) < 3:
+        raise ValueError("the wheels' spin axes do not span three dimensions")
+    return np.concatenate([head, np.linalg.pinv(A).ravel()])
+
+
+@jit_inline
+def clip(x, limit):
+    """``x`` limited to ``[-limit, limit]``."""
+    return min(max(x, -limit), limit)
+
+
+@jit_inline
+def frame_quaternion(o1, o2, o3):
+    """The quaternion mapping frame components to inertial ones for the frame whose axes have
+    the inertial components ``o1, o2, o3`` (Shepperd's method, scalar part >= 0)."""
+    m00, m11, m22 = o1[0], o2[1], o3[2]
+    tr = m00 + m11 + m22
+    if tr >= m00 and tr >= m11 and tr >= m22:
+        w = 0.5 * math.sqrt(1.0 + tr)
+        f = 0.25 / w
+        return (w, (o2[2] - o3[1]) * f, (o3[0] - o1[2]) * f, (o1[1] - o2[0]) * f)
+    if m00 >= m11 and m00 >= m22:
+        x = 0.5 * math.sqrt(1.0 + 2.0 * m00 - tr)
+        f = 0.25 / x
+        q = ((o2[2] - o3[1]) * f, x, (o2[0] + o1[1]) * f, (o3[0] + o1[2]) * f)
+    elif m11 >= m22:
+        y = 0.5 * math.sqrt(1.0 + 2.0 * m11 - tr)
+        f = 0.25 / y
+        q = ((o3[0] - o1[2]) * f, (o2[0] + o1[1]) * f, y, (o3[1] + o2[2]) * f)
+    else:
+        z = 0.5 * math.sqrt(1.0 + 2.0 * m22 - tr)
+        f = 0.25 / z
+        q = ((o1[1] - o2[0]) * f, (o3[0] + o1[2]) * f, (o3[1] + o2[2]) * f, z)
+    if q[0] < 0.0:
+        return (-q[0], -q[1], -q[2], -q[3])
+    return q
+
+
+@jit_inline
+def orbital_target(r, xhat, v):
+    """``(p, omega_s)``: the orbital frame's quaternion (O -> S) and its rate (inertial) at the
+    position ``r xhat`` and velocity ``v``."""
+    hx = r * (xhat[1] * v[2] - xhat[2] * v[1])
+    hy = r * (xhat[2] * v[0] - xhat[0] * v[2])
+    hz = r * (xhat[0] * v[1] - xhat[1] * v[0])
+    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+    o3 = (hx / hn, hy / hn, hz / hn)
+    o2 = cross(o3, xhat)
+    r2 = r * r
+    return frame_quaternion(xhat, o2, o3), (hx / r2, hy / r2, hz / r2)
+
+
+@jit_inline
+def pointing_error(s_b, b):
+    """The shortest rotation taking the unit vector ``s_b`` onto ``b`` (both body axes), as a
+    unit quaternion; about any axis normal to ``b`` when they are opposite."""
+    c = s_b[0] * b[0] + s_b[1] * b[1] + s_b[2] * b[2]
+    x = cross(s_b, b)
+    w = 1.0 + c
+    n = math.sqrt(w * w + x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+    if n < 1e-12:  # opposite: half a turn about an axis normal to b
+        k = (1.0, 0.0, 0.0) if abs(b[0]) < 0.9 else (0.0, 1.0, 0.0)
+        x = cross(b, k)
+        m = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        return (0.0, x[0] / m, x[1] / m, x[2] / m)
+    return (w / n, x[0] / n, x[1] / n, x[2] / n)
+
+
+@jit_inline
+def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
+    """The PD law's commanded torque (body axes, each axis clipped) for the attitude ``q`` and
+    body rate ``omega``; the orbit's ``r, xhat, v`` and the Sun's position ``sun_s`` (inertial)
+    serve the orbital and Sun targets."""
+    target = params[p0]
+    kp = params[p0 + 1]
+    kd = params[p0 + 2]
+    tmax = params[p0 + 3]
+    wt = (0.0, 0.0, 0.0)
+    if target == TARGET_SUN:
+        dx = sun_s[0] - r * xhat[0]
+        dy = sun_s[1] - r * xhat[1]
+        dz = sun_s[2] - r * xhat[2]
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        s_b = rotate_inv(q, (dx / d, dy / d, dz / d))
+        qe = pointing_error(s_b, (params[p0 + 5], params[p0 + 6], params[p0 + 7]))
+    else:
+        if target == TARGET_ORBITAL:
+            qt, wt_s = orbital_target(r, xhat, v)
+            wt = rotate_inv(q, wt_s)
+        else:
+            qt = (params[p0 + 5], params[p0 + 6], params[p0 + 7], params[p0 + 8])
+        qe = qmul(qconj(qt), q)
+    sg = 1.0 if qe[0] >= 0.0 else -1.0
+    return (clip(-kp * sg * qe[1] - kd * (omega[0] - wt[0]), tmax),
+            clip(-kp * sg * qe[2] - kd * (omega[1] - wt[1]), tmax),
+            clip(-kp * sg * qe[3] - kd * (omega[2] - wt[2]), tmax))
+
+
+@jit_inline
+def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
+    """Make the body torque ``tau`` with the wheels: the motor torques ``u`` (written; one per
+    wheel, clipped to the motor and speed limits) and the torque the body feels, ``-A u``
+    (returned). ``y[8 + k]`` is wheel ``k``'s axial momentum; the pseudo-inverse is in the PD
+    row from ``params[pd0 + PD_HEADER]``, the wheels from ``params[wheels0]``."""
+    nw = u.shape[0]
+    tb = (0.0, 0.0, 0.0)
+    for k in range(nw):
+        pk = pd0 + PD_HEADER + 3 * k
+        uk = -(params[pk] * tau[0] + params[pk + 1] * tau[1] + params[pk + 2] * tau[2])
+        w = wheels0 + 1 + WHEEL_SIZE * k
+        a = (params[w], params[w + 1], params[w + 2])
+        uk = clip(uk, params[w + 4])
+        speed = y[8 + k] / params[w + 3] - (a[0] * omega[0] + a[1] * omega[1] + a[2] * omega[2])
+        if (speed >= params[w + 5] and uk > 0.0) or (speed <= -params[w + 5] and uk < 0.0):
+            uk = 0.0
+        u[k] = uk
+        tb = (tb[0] - uk * a[0], tb[1] - uk * a[1], tb[2] - uk * a[2])
+    return tb
+
+
+@jit_inline
+def bdot_dipole(q, omega, b_s, bdot_s, gain, mmax):
+    """``(m, B_B)``: the B-dot dipole (body axes, each axis clipped to ``mmax``) and the field
+    in body axes, from the field ``b_s`` and its rate ``bdot_s`` along the orbit (inertial)."""
+    b = rotate_inv(q, b_s)
+    db = rotate_inv(q, bdot_s)
+    wb = cross(omega, b)
+    return (clip(-gain * (db[0] - wb[0]), mmax), clip(-gain * (db[1] - wb[1]), mmax),
+            clip(-gain * (db[2] - wb[2]), mmax)), b

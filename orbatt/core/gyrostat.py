@@ -1,0 +1,158 @@
+"""The extended right-hand side: reaction wheels (the body as a gyrostat) and control laws in
+the canonical variables (``DESIGN.md`` §10).
+
+State ``y = (q, Q, h_1 .. h_n)``: ``h_k`` the axial angular momentum of wheel ``k`` (absolute:
+``h_k = Iw_k (a_k . omega + speed_k)``, ``speed_k`` the rotor's rate relative to the body).
+``g = 1/2 Im(q~ Q)`` is the **total** angular momentum (body + rotors, body axes), and the
+body rate is ``omega = J^-1 (g - h)`` with ``h = sum h_k a_k`` and ``J = diag(I) - sum Iw_k
+a_k a_k^T`` (``I`` the principal moments of the whole spacecraft, rotors locked). The kinetic
+energy ``T = 1/2 (g - h).J^-1 (g - h)`` gives Hamilton's equations of eq. (7) with ``a = (0,
+2 omega)``::
+
+    dq/dt = 1/4 q a,    dQ/dt = 1/4 Q a - G,    dh_k/dt = u_k
+
+(``G`` the terms' generalized gradient plus ``-2 q (0, tau)`` for the external control torque;
+``u_k`` the motor torques, which move momentum between rotor and body and leave ``G`` of the
+whole unchanged). With no wheels, ``J = diag(I)`` and this is eq. (7) of the rigid body with
+the control laws of :mod:`orbatt.core.control` added.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import jit, jit_inline
+from . import control as ctl
+from .environment import spline_eval, spline_eval_rate
+from .model import (BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, gradient, orbit_radial)
+from .qalg import qconj, qmul
+from .torques import gradient_of_torque
+
+
+@jit_inline
+def wheel_row(terms):
+    """The start of the wheels' parameters in ``params`` (``-1``: no wheels)."""
+    for j in range(1, terms.shape[0]):
+        if terms[j, KIND] == WHEELS:
+            return terms[j, P0]
+    return -1
+
+
+@jit_inline
+def body_rate(g, y, inertia, params, w0):
+    """``(omega, h)``: the body rate ``J^-1 (g - h)`` and the wheels' momentum ``h`` (body
+    axes) for the total momentum ``g`` and the wheels' axial momenta ``y[8:]`` (wheel
+    parameters from ``params[w0]``; ``w0 < 0``: a rigid body, ``omega = g / I``)."""
+    if w0 < 0:
+        return (g[0] / inertia[0], g[1] / inertia[1], g[2] / inertia[2]), (0.0, 0.0, 0.0)
+    j00, j11, j22 = inertia[0], inertia[1], inertia[2]
+    j01 = j02 = j12 = 0.0
+    h0 = h1 = h2 = 0.0
+    for k in range(int(params[w0])):
+        w = w0 + 1 + ctl.WHEEL_SIZE * k
+        a0, a1, a2, iw = params[w], params[w + 1], params[w + 2], params[w + 3]
+        j00 -= iw * a0 * a0
+        j11 -= iw * a1 * a1
+        j22 -= iw * a2 * a2
+        j01 -= iw * a0 * a1
+        j02 -= iw * a0 * a2
+        j12 -= iw * a1 * a2
+        hk = y[8 + k]
+        h0 += hk * a0
+        h1 += hk * a1
+        h2 += hk * a2
+    x0, x1, x2 = g[0] - h0, g[1] - h1, g[2] - h2
+    # J^-1 x by cofactors (J symmetric positive definite)
+    c00 = j11 * j22 - j12 * j12
+    c01 = j02 * j12 - j01 * j22
+    c02 = j01 * j12 - j02 * j11
+    c11 = j00 * j22 - j02 * j02
+    c12 = j01 * j02 - j00 * j12
+    c22 = j00 * j11 - j01 * j01
+    det = j00 * c00 + j01 * c01 + j02 * c02
+    return ((c00 * x0 + c01 * x1 + c02 * x2) / det, (c01 * x0 + c11 * x1 + c12 * x2) / det,
+            (c02 * x0 + c12 * x1 + c22 * x2) / det), (h0, h1, h2)
+
+
+@jit_inline
+def control_torques(t, q, omega, y, terms, params, table, work, w0, u):
+    """``(tau_ext, tau_applied, m)``: the external control torque (ideal PD and B-dot, body
+    axes), the torque the control applies to the body (external or the wheels' reaction),
+    and the B-dot dipole; the wheels' motor torques go into ``u`` (zero without a
+    wheel-actuated law)."""
+    for k in range(u.shape[0]):
+        u[k] = 0.0
+    ext = (0.0, 0.0, 0.0)
+    app = (0.0, 0.0, 0.0)
+    m = (0.0, 0.0, 0.0)
+    n = terms.shape[0]
+    r, xhat, v = orbit_radial(t, terms, params, table, work)
+    for j in range(1, n):
+        kind = terms[j, KIND]
+        p0 = terms[j, P0]
+        if kind == PD_CONTROL:
+            sun = (0.0, 0.0, 0.0)
+            if terms[j, R1] > terms[j, R0]:
+                s4 = spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+                sun = (s4[0], s4[1], s4[2])
+            tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
+            if params[p0 + 4] == ctl.ACTUATOR_WHEELS:
+                tb = ctl.wheel_torques(tau, omega, y, params, p0, w0, u)
+                app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
+            else:
+                ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
+                app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+        elif kind == BDOT_CONTROL:
+            b_s, bdot_s = spline_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
+            m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params[p0], params[p0 + 1])
+            tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
+            ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
+            app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+    return ext, app, m
+
+
+@jit
+def rhs_extended(t, y, inertia, terms, params, table, work, dy):
+    """``dy/dt`` of the gyrostat with control (module docstring) into ``dy`` (``len(y)``
+    components: 8 plus one per wheel)."""
+    q = (y[0], y[1], y[2], y[3])
+    Q = (y[4], y[5], y[6], y[7])
+    w0 = wheel_row(terms)
+    w = qmul(qconj(q), Q)
+    omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
+    a = (0.0, 2.0 * omega[0], 2.0 * omega[1], 2.0 * omega[2])
+    qd = qmul(q, a)
+    Qd = qmul(Q, a)
+    _, G = gradient(t, q, inertia, terms, params, table, work)
+    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:])
+    Gc = gradient_of_torque(q, ext)
+    for k in range(4):
+        dy[k] = 0.25 * qd[k]
+        dy[4 + k] = 0.25 * Qd[k] - G[k] - Gc[k]
+
+
+@jit
+def evaluate_extended(t, Y, inertia, terms, params, table, work):
+    """At the times ``t (N,)`` and states ``Y (N, 8 + n)``: the body rate ``omega (N, 3)``, the
+    wheels' momentum ``h (N, 3)`` (body axes), the torque the control applies to the body
+    ``tau (N, 3)``, the B-dot dipole ``m (N, 3)`` and the motor torques ``u (N, n)`` (for the
+    outputs of a result)."""
+    N = Y.shape[0]
+    nw = Y.shape[1] - 8
+    omega = np.empty((N, 3))
+    h = np.empty((N, 3))
+    tau = np.empty((N, 3))
+    m = np.empty((N, 3))
+    u = np.zeros((N, nw))
+    w0 = wheel_row(terms)
+    for i in range(N):
+        y = Y[i]
+        q = (y[0], y[1], y[2], y[3])
+        w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
+        om, hv = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
+        _, app, mi = control_torques(t[i], q, om, y, terms, params, table, work, w0, u[i])
+        for k in range(3):
+            omega[i, k] = om[k]
+            h[i, k] = hv[k]
+            tau[i, k] = app[k]
+            m[i, k] = mi[k]
+    return omega, h, tau, m, u
