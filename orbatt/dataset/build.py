@@ -19,6 +19,7 @@ from astropy import units as u
 from .. import canonical as cn
 from .. import quaternion as qt
 from ..body import RigidBody
+from .control import control_variables, wheel_coordinates
 from ..epoch import iso_epoch
 from ..errors import InputError
 from ..orbital import lvlh_angles
@@ -320,6 +321,12 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
         })
 
     data.update(_torque_variables(tr.potential, body, inertia, t, q, tdims, ens))
+    extra = control_variables(tr, body, inertia, t, tdims, U)
+    if "kinetic_energy" in extra:  # a gyrostat: its rate and energy replace the rigid body's
+        extra["energy"] = cf_variable(tdims, extra["kinetic_energy"].values + Upot, U["energy"],
+                                      "total energy H = T + U")
+    data.update(extra)
+    coords.update(wheel_coordinates(body, U))
 
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,

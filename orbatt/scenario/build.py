@@ -25,7 +25,7 @@ from ..torques import EnvironmentTorques
 from ..orbital import state_from_orbital
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "tle_period", "build_potential",
-           "build_environment_torques", "build_initial_state",
+           "build_environment_torques", "build_control", "build_initial_state",
            "build_output_times", "check_work", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
@@ -128,16 +128,32 @@ def build_environment_torques(spec, orbit, t_end):
     if tq["residual_dipole"] is not None:
         field = IGRFField() if env["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     dipole = None if tq["residual_dipole"] is None else tq["residual_dipole"] * u.A * u.m**2
+    control = None if spec.control is None else spec.control["control"]
+    if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
+        field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     return EnvironmentTorques(orbit, t_end * u.s, facets=tq["facets"], gravity_gradient=True, drag=tq["drag"],
                               srp=tq["srp"], residual_dipole=dipole, atmosphere=atmosphere, magnetic_field=field,
-                              shadow=env["shadow"], corotation=env["corotation"])
+                              shadow=env["shadow"], corotation=env["corotation"], control=control)
+
+
+def build_control(spec, orbit, t_end):
+    """The gravity gradient along ``orbit`` with the control law of ``spec.control`` (an
+    :class:`~orbatt.torques.EnvironmentTorques` without environment terms), up to ``t_end``
+    (s)."""
+    c = spec.control
+    field = None
+    if c["magnetic_field"] is not None:
+        field = IGRFField() if c["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
+    return EnvironmentTorques(orbit, t_end * u.s, gravity_gradient=True, magnetic_field=field, control=c["control"])
 
 
 def build_potential(spec, orbit, t_end=None):
     """The potential of ``spec.potential_kind`` (a gravity gradient needs the ``orbit``; with
-    ``[torques]``, the environment torques sampled up to ``t_end``)."""
+    ``[torques]`` or a ``[control]`` law, the environment torques sampled up to ``t_end``)."""
     if spec.torques is not None:
         return build_environment_torques(spec, orbit, t_end)
+    if spec.control is not None and spec.control["control"] is not None:
+        return build_control(spec, orbit, t_end)
 
     if spec.potential_kind == "torque-free":
         return TorqueFree()

@@ -48,7 +48,8 @@ class Scenario:
         self.description = spec.description
         self.text = spec.text
         ctx = FieldContext(str(path) if path else spec.name)
-        self.body = RigidBody(spec.inertia if spec.dimensionless else spec.inertia * U.INERTIA)
+        wheels = spec.control["wheels"] if spec.control is not None else ()
+        self.body = RigidBody(spec.inertia if spec.dimensionless else spec.inertia * U.INERTIA, wheels=wheels)
         self.orbit = None
         kepler = period = None
         provider = spec.orbit["provider"] if spec.orbit is not None else None

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from .schema import KEY_DOCS, REQUIRED_TABLES, TABLES, TOP_KEYS
 from .sweep_schema import PARAMETERS, SWEEP_KEY_DOCS, SWEEP_KEYS
+from .control_schema import WHEEL_KEYS
 from .torques_schema import FACET_KEYS
 
 __all__ = ["markdown", "undocumented_keys"]
@@ -55,6 +56,9 @@ def markdown() -> str:
         if table == "body":
             lines += ["### `[[body.facets]]`", "", "One table per flat plate (environment torques).", ""]
             lines += _table((k, KEY_DOCS["body.facets"][k]) for k in KEY_DOCS["body.facets"]) + [""]
+            lines += ["### `[[body.wheels]]`", "", "One table per reaction wheel (with `[control]`, or free "
+                      "wheels).", ""]
+            lines += _table((k, KEY_DOCS["body.wheels"][k]) for k in KEY_DOCS["body.wheels"]) + [""]
     lines += ["## `[sweep]`", "", "Optional: many cases run by `orbatt sweep` (manual: `docs/sweeps.md`); "
               "`orbatt run` runs the nominal case.", ""]
     lines += _table((k, SWEEP_KEY_DOCS[k]) for k in SWEEP_KEYS) + [""]
@@ -79,6 +83,7 @@ def undocumented_keys():
         out += [(table, k) for k in sorted(set(keys) ^ set(docs))]
     out += [("", k) for k in sorted(TOP_KEYS ^ set(KEY_DOCS.get("", {})))]
     out += [("body.facets", k) for k in sorted(FACET_KEYS ^ set(KEY_DOCS.get("body.facets", {})))]
+    out += [("body.wheels", k) for k in sorted(WHEEL_KEYS ^ set(KEY_DOCS.get("body.wheels", {})))]
     out += [("sweep", k) for k in sorted(set(SWEEP_KEYS) ^ set(SWEEP_KEY_DOCS))]
     return out
 

@@ -70,6 +70,7 @@ from ..errors import InputError
 from ..epoch import parse_epoch
 from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
+from .control_schema import CONTROL_KEYS, parse_control
 from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
 from ..methods.problem import MAX_ATOL, MAX_RTOL
@@ -80,7 +81,7 @@ __all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRE
 
 TOP_KEYS = {"name", "description"}
 TABLES = {
-    "body": {"inertia", "mass_g", "center_of_mass", "facets"},
+    "body": {"inertia", "mass_g", "center_of_mass", "facets", "wheels"},
     "initial": {"q", "Q", "omega", "euler_313", "euler_momenta", "frame"},
     "potential": {"kind", "sign"},
     "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
@@ -89,6 +90,7 @@ TABLES = {
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
     "torques": TORQUE_KEYS,  # validated by parse_torques (torques_schema.py)
     "environment": ENVIRONMENT_KEYS,
+    "control": CONTROL_KEYS,  # validated by parse_control (control_schema.py)
 }
 #: what each key of :data:`TABLES` is: ``(dimension, default, meaning)`` (``docs/scenarios.md``
 #: is generated from this table by :mod:`orbatt.scenario.reference`; a test keeps the two equal
@@ -107,6 +109,30 @@ KEY_DOCS = {
                            "the fixed point"),
         "facets": ("array of tables", "none", "[[body.facets]]: the flat plates of the body, for [torques] drag and "
                    "srp (keys below)"),
+        "wheels": ("array of tables", "none", "[[body.wheels]]: reaction wheels (keys below); the body becomes a "
+                   "gyrostat and `inertia` is that of the whole spacecraft with the rotors locked"),
+    },
+    "body.wheels": {
+        "axis": ("plain, 3 values", "required", "unit spin axis, body axes"),
+        "inertia": ("mass x length^2", "required", "axial moment of the rotor"),
+        "speed": ("angular rate", "0", "rotor speed relative to the body at the start (`\"1000 rpm\"`)"),
+        "max_torque": ("torque (N m)", "none", "motor torque limit"),
+        "max_speed": ("angular rate", "none", "speed limit: the motor does not push the rotor beyond it"),
+    },
+    "control": {
+        "law": ("'pd' | 'bdot'", "required", "quaternion PD feedback, or B-dot detumbling with magnetorquers"),
+        "target": ("'orbital' | 'inertial' | 'sun'", "'orbital'", "pd: hold the orbital frame (q_orbital -> 1), the "
+                   "attitude target_q, or point target_axis at the Sun (needs [orbit] epoch)"),
+        "target_q": ("plain, 4 values", "required for inertial", "pd: target attitude [w, x, y, z], body -> inertial"),
+        "target_axis": ("plain, 3 values", "required for sun", "pd: unit body axis to point at the Sun"),
+        "kp": ("torque (N m)", "required for pd", "torque per unit quaternion error"),
+        "kd": ("torque x time (N m s)", "required for pd", "torque per unit rate error (rad/s)"),
+        "max_torque": ("torque (N m)", "none", "pd: per-axis saturation of the commanded torque"),
+        "actuator": ("'ideal' | 'wheels'", "'ideal'", "pd: an ideal external torque, or the [[body.wheels]] (their "
+                     "axes must span 3 dimensions; their limits apply)"),
+        "gain": ("A m2 s / T", "required for bdot", "bdot: m = -gain dB/dt (body axes); reads [environment] "
+                 "magnetic_field"),
+        "max_dipole": ("magnetic moment (A m2)", "required for bdot", "bdot: per-axis limit of the dipole"),
     },
     "body.facets": {
         "area": ("area", "required", "the plate's area (> 0)"),
@@ -235,6 +261,7 @@ class Spec:
     integration: dict = field(default_factory=dict)
     sweep: SweepSpec | None = None  # the [sweep] table, if any
     torques: dict | None = None  # [torques], [environment] and the facets (torques_schema.py)
+    control: dict | None = None  # [control] and the wheels (control_schema.py)
 
 
 def parse(text: str, source: str = "<scenario>") -> Spec:
@@ -291,7 +318,8 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     elif "orbit" in data:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
-    torques = parse_torques(ctx, data, kind, orbit)
+    ctl = data.get("control")
+    torques = parse_torques(ctx, data, kind, orbit, bdot=isinstance(ctl, dict) and ctl.get("law") == "bdot")
     if torques is not None and dimless:
         raise ctx.error("[torques]", "the environment torques need a dimensional scenario ([body] inertia with units)")
     init = data["initial"]
@@ -301,7 +329,16 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     initial = _parse_initial(ctx, init, dimless)
 
     integ = _parse_integration(ctx, data["integration"], dimless, orbit)
+    control = parse_control(ctx, data, kind, orbit, dimless, integ["method"])
+    if control is not None and control["wheels"]:
+        try:  # the gyrostat must keep inertia about every axis
+            RigidBody(inertia * U.INERTIA, wheels=control["wheels"])
+        except InputError as exc:
+            raise ctx.error("[[body.wheels]] inertia", str(exc).split(": ", 1)[-1]) from None
     sweep = None
+    if "sweep" in data and control is not None:
+        raise ctx.error("[sweep]", "sweeps of scenarios with [control] or [[body.wheels]] are not supported yet; run "
+                                   "the cases one by one")
     if "sweep" in data and torques is not None:
         raise ctx.error("[sweep]", "sweeps of scenarios with [torques] are not supported yet; run the cases one by one")
     if "sweep" in data:
@@ -313,7 +350,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         raise ctx.error("name/description", "must be strings")
     return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
                 potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
-                integration=integ, sweep=sweep, torques=torques)
+                integration=integ, sweep=sweep, torques=torques, control=control)
 
 
 def _check_normalized_orbit(ctx, o):

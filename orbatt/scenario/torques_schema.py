@@ -89,15 +89,19 @@ def _facets(ctx, raw):
     return out
 
 
-def parse_torques(ctx, data, potential_kind, orbit):
+def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     """The torque settings of a scenario (``None`` without ``[torques]``): a dict of
     ``facets`` (list of :class:`~orbatt.torques.Facet`), ``drag``, ``srp``, ``residual_dipole``
     (A m^2 or None) and ``environment`` (the models' settings, SI floats); raises
-    :class:`~orbatt.scenario.ScenarioError` naming the key."""
+    :class:`~orbatt.scenario.ScenarioError` naming the key. ``bdot``: a B-dot law reads
+    ``[environment] magnetic_field`` (:mod:`orbatt.scenario.control_schema`)."""
     body = data.get("body", {})
     facets = _facets(ctx, body["facets"]) if "facets" in body else []
     if "torques" not in data:
-        if "environment" in data:
+        env = data.get("environment", {})
+        if bdot and isinstance(env, dict) and set(env) <= {"magnetic_field"}:
+            env = {}
+        if env:
             raise ctx.error("[environment]", "only read with a [torques] table; add one or remove it")
         if facets:
             raise ctx.error("[[body.facets]]", "only read by [torques] drag or srp; add them or remove the facets")
@@ -165,8 +169,9 @@ def parse_torques(ctx, data, potential_kind, orbit):
     if dipole is not None and field == "none":
         raise ctx.error("[environment] magnetic_field", "'none' with a [torques] residual_dipole; choose 'igrf' or "
                                                         "'dipole'")
-    if field != "none" and dipole is None:
-        raise ctx.error("[environment] magnetic_field", "only read with a [torques] residual_dipole")
+    if field != "none" and dipole is None and not bdot:
+        raise ctx.error("[environment] magnetic_field", "only read with a [torques] residual_dipole or a B-dot "
+                                                        "[control]")
     if field != "none" and epoch is None:
         raise ctx.error("[orbit] epoch", f"missing; the {field} field needs the date (give [orbit] epoch)")
     if srp and epoch is None:

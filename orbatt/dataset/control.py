@@ -1,0 +1,120 @@
+"""The variables of a controlled run or of a body with reaction wheels (issue 12): the torque
+the control applies, the B-dot dipole, the wheels' speeds and momenta, and the body rate and
+kinetic energy of the gyrostat (which replace the rigid body's in :func:`to_dataset`).
+
+Computed from the outputs by :func:`orbatt.core.gyrostat.evaluate_extended`, the kernel the
+integration used; nothing is integrated here.
+"""
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .. import canonical as cn
+from ..core import gyrostat as kg
+from ..core import potentials as kp
+from ..methods.problem import kernel_spec
+
+__all__ = ["control_variables", "wheel_coordinates", "TORQUE_TO_N_M"]
+
+#: kg km^2 s^-2 (the internal torque unit) -> N m; 1e-6 A m^2 (the internal dipole) -> A m^2
+TORQUE_TO_N_M = 1e6
+
+
+def _var(dims, data, units, long_name, **extra):
+    attrs = {"units": units, "long_name": long_name}
+    attrs.update(extra)
+    return xr.Variable(dims, data, attrs)
+
+
+def control_variables(trajectory, body, inertia, t, tdims, units):
+    """The control and wheel variables of ``trajectory`` (an empty dict for a rigid body
+    without control).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Its ``potential`` may hold a ``control`` law; ``wheel_momenta`` the wheels' state.
+    body : RigidBody
+        The body (its ``wheels``).
+    inertia : ndarray (3,) or (E, 3)
+        Principal moments of each member (kg km^2).
+    t : ndarray (N,)
+        Output times (s).
+    tdims : tuple
+        ``("time",)`` or ``("case", "time")``.
+    units : dict
+        The unit spellings of :data:`orbatt.units.DIMENSIONAL_UNITS`.
+
+    Returns
+    -------
+    dict of xarray.Variable
+        ``omega`` (rad/s) and ``kinetic_energy`` (body + rotors) of the gyrostat, and
+        ``wheel_momentum`` (kg km^2/s, axial, absolute), ``wheel_speed`` (rad/s, relative to
+        the body), ``wheel_torque`` (N m, motor) with a ``wheel`` dimension; with a control law
+        ``torque_control`` (N m, body axes) and, for B-dot, ``dipole_control`` (A m^2).
+    """
+    control = getattr(trajectory.potential, "control", None)
+    wheels = body.wheels
+    if control is None and not wheels:
+        return {}
+    ens = len(tdims) == 2
+    q = np.asarray(trajectory.q, dtype=np.float64)
+    Q = np.asarray(trajectory.Q, dtype=np.float64)
+    h = trajectory.wheel_momenta
+    members = q.shape[0] if ens else 1
+    n = len(wheels)
+    qs = q.reshape(members, -1, 4)
+    Qs = Q.reshape(members, -1, 4)
+    hs = (np.zeros(qs.shape[:2] + (0,)) if h is None else np.asarray(h, dtype=np.float64).reshape(members, -1, n))
+    I = np.broadcast_to(np.asarray(inertia, dtype=np.float64), (members, 3))
+    model = kernel_spec(trajectory.potential, [body])
+    out = {k: [] for k in ("omega", "hvec", "tau", "m", "u")}
+    for e in range(members):
+        Y = np.ascontiguousarray(np.concatenate([qs[e], Qs[e], hs[e]], axis=1))
+        res = kg.evaluate_extended(t, Y, np.ascontiguousarray(I[e]), *model, kp.new_work())
+        for k, v in zip(out, res):
+            out[k].append(v)
+    shape = (lambda a: a) if ens else (lambda a: a[0])
+    omega, hvec, tau, m, u = (shape(np.stack(out[k])) for k in out)
+    vv = tdims + ("axis",)
+    wv = tdims + ("wheel",)
+    data = {}
+    if wheels:
+        iw = np.array([w.inertia for w in wheels])
+        axes = np.array([w.axis for w in wheels])
+        hw = shape(hs)
+        g = cn.body_momentum(q, Q)
+        T = 0.5 * np.sum((g - hvec) * omega, axis=-1) + np.sum(hw * hw / (2.0 * iw), axis=-1)
+        data["omega"] = _var(vv, omega, units["rate"], "angular velocity of the body (body components)", frame="B",
+                             comment="gyrostat: omega = J^-1 (g - h), J = I - sum Iw a a^T")
+        data["kinetic_energy"] = _var(tdims, T, units["energy"], "kinetic energy of the body and the rotors",
+                                      comment="1/2 (g - h).omega + sum h_k^2 / (2 Iw_k)")
+        data["wheel_momentum"] = _var(wv, hw, units["momentum"], "axial angular momentum of each reaction wheel",
+                                      comment="h_k = Iw_k (a_k.omega + speed_k), absolute")
+        data["wheel_speed"] = _var(wv, hw / iw - np.einsum("...i,ki->...k", omega, axes), units["rate"],
+                                   "speed of each reaction wheel relative to the body")
+        data["wheel_torque"] = _var(wv, u * TORQUE_TO_N_M, "N m", "motor torque of each reaction wheel",
+                                    comment="dh_k/dt; the body feels -u_k a_k")
+    if control is not None:
+        data["torque_control"] = _var(vv, tau * TORQUE_TO_N_M, "N m",
+                                      "torque the attitude control applies to the body (body components)", frame="B",
+                                      control_law=control.law,
+                                      comment=("reaction of the wheels' motors (internal)" if
+                                               getattr(control, "actuator", "") == "wheels" else "external torque"))
+        if control.law == "bdot":
+            data["dipole_control"] = _var(vv, m * TORQUE_TO_N_M, "A m^2", "B-dot magnetic dipole (body components)",
+                                          frame="B")
+    return data
+
+
+def wheel_coordinates(body, units):
+    """The ``wheel`` coordinate and the wheels' axes (``wheel_axis``) of a body with wheels."""
+    if not body.wheels:
+        return {}
+    n = len(body.wheels)
+    return {"wheel": _var(("wheel",), np.arange(n), "1", "reaction wheel index"),
+            "wheel_axis": _var(("wheel", "axis"), np.array([w.axis for w in body.wheels]), "1",
+                               "spin axis of each reaction wheel (body components)", frame="B"),
+            "wheel_inertia": _var(("wheel",), np.array([w.inertia for w in body.wheels]), units["inertia"],
+                                  "axial moment of inertia of each rotor")}
