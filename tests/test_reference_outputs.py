@@ -4,7 +4,10 @@
 variable at 120 evenly spaced output times (``<name>.npz``) and each variable's dimensions
 and attributes (``<name>.json``), written by ``make_reference.py`` from orbatt 0.1.0 (commit
 8c0a873) before the code was reorganized. The comparison is bitwise: the arithmetic of the
-integration and of the derived variables did not change.
+integration and of the derived variables did not change. ``lvlh-hold-wheels`` (issue 12) was
+written when it was added, to keep the gyrostat's results from drifting unnoticed; scenarios
+whose environment comes from numpy-heavy field libraries (IGRF, NRLMSIS) have none, as their
+last bits may depend on the CPU's SIMD paths.
 """
 from __future__ import annotations
 

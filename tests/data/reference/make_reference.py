@@ -1,8 +1,11 @@
 import sys, glob, os, json, numpy as np
 import orbatt
 out = sys.argv[1]
+only = set(sys.argv[2:])  # scenario names to (re)write; all when none given
 for p in sorted(glob.glob("scenarios/*.toml")):
     name = os.path.basename(p)[:-5]
+    if only and name not in only:
+        continue
     ds = orbatt.load_scenario(p).run()
     n = ds.sizes["time"]
     idx = np.unique(np.linspace(0, n - 1, min(n, 120)).round().astype(int))
