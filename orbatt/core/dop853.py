@@ -47,6 +47,7 @@ from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VA
                    FLAG_REJECTED, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, jit, jit_inline,
                    jit_parallel, keepalive)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES, ORDER
+from .gyrostat import rhs_extended
 from .hamiltonian import rhs, rhs_inline
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
@@ -222,25 +223,31 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin
 # One trajectory
 
 
-@jit
-def _initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol, atol, hmax):
-    """Hairer's ``hinit`` (order 8): a first step from the sizes of ``y``, ``f`` and an
-    estimate of the second derivative (one extra RHS evaluation)."""
-    aQ = atol * momentum_scale(inertia)
-    dnf, dny = hinit_norms(y, f0, atol, aQ, rtol)
-    h = min(hinit_guess(dnf, dny), hmax)
-    if not (h > 0.0 and h < np.inf):
-        return h
-    for i in range(y.shape[0]):
-        ytmp[i] = y[i] + h * f0[i]
-    rhs(t + h, ytmp, inertia, terms, params, table, work, f1)
-    return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
+def _initial_step_of(f):
+    """Hairer's ``hinit`` on the right-hand side ``f``."""
+
+    def initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol, atol, hmax):
+        """Hairer's ``hinit`` (order 8): a first step from the sizes of ``y``, ``f`` and an
+        estimate of the second derivative (one extra RHS evaluation)."""
+        aQ = atol * momentum_scale(inertia)
+        dnf, dny = hinit_norms(y, f0, atol, aQ, rtol)
+        h = min(hinit_guess(dnf, dny), hmax)
+        if not (h > 0.0 and h < np.inf):
+            return h
+        for i in range(y.shape[0]):
+            ytmp[i] = y[i] + h * f0[i]
+        f(t + h, ytmp, inertia, terms, params, table, work, f1)
+        return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
+
+    return jit(initial_step)
 
 
-def _advance_of(width):
-    """The one-trajectory step loop for states of ``width`` components (0: any width,
-    ``len(y)``). The rigid body's loop keeps the constant 8, which LLVM unrolls, so it runs as
+def _advance_of(width, f, f_inline):
+    """The one-trajectory step loop on the right-hand side ``f`` (``f_inline`` at the stages)
+    for states of ``width`` components (0: any width, ``len(y)``). The rigid body's loop keeps the constant 8, which LLVM unrolls, so it runs as
     fast as before wider states existed (measured on the Keplerian case: 1.29 ms both)."""
+
+    initial_step = _initial_step_of(f)
 
     def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, params, table,
                 work, rtol, atol, max_step, max_steps, budget):
@@ -291,13 +298,13 @@ def _advance_of(width):
         if i_out >= nout:
             return DONE
         if (flags & FLAG_F0_VALID) == 0:
-            rhs(t, y, inertia, terms, params, table, work, f0)
+            f(t, y, inertia, terms, params, table, work, f0)
             cnt[CNT_NFEV] += 1
             flags |= FLAG_F0_VALID
         for i in range(ncomp):
             K[0, i] = f0[i]
         if h <= 0.0:
-            h = _initial_step(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
+            h = initial_step(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
                               min(max_step, t_out[nout - 1] - t))
             cnt[CNT_NFEV] += 1
             if not (h > 0.0 and h < np.inf):
@@ -328,7 +335,7 @@ def _advance_of(width):
                         ytmp[i] += a * K[j, i]
                 for i in range(ncomp):
                     ytmp[i] = y[i] + hh * ytmp[i]
-                rhs_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
+                f_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
             cnt[CNT_NFEV] += N_STAGES - 1
             # --- 8th-order solution and error estimate
             e5 = 0.0
@@ -358,7 +365,7 @@ def _advance_of(width):
             if err <= 1.0:
                 # accepted: FSAL derivative at the new point
                 t_new = t_next if landing else t + hh
-                rhs(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
+                f(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
                 cnt[CNT_NFEV] += 1
                 ok = True
                 for i in range(ncomp):
@@ -410,10 +417,11 @@ def _advance_of(width):
 
 
 #: the step loop of the rigid body, ``y = (q, Q)``
-advance = _advance_of(NDIM)
-#: the step loop of a state of any width (the gyrostat's ``(q, Q, h)``: one axial momentum per
-#: reaction wheel); compiled on first use only
-advance_wide = _advance_of(0)
+advance = _advance_of(NDIM, rhs, rhs_inline)
+#: the step loop of extended models (reaction wheels, control laws: :mod:`orbatt.core.gyrostat`),
+#: states of any width (the gyrostat's ``(q, Q, h)``: one axial momentum per wheel); compiled on
+#: first use only, so that the rigid body's loop does not carry the extended right-hand side
+advance_wide = _advance_of(0, rhs_extended, rhs_extended)
 
 
 def _batch_of(advance_one):

@@ -18,9 +18,8 @@ compare with.
 from __future__ import annotations
 
 from ._jit import jit, jit_inline
-from .gyrostat import rhs_extended
-from .model import (EXTENDED, FLAGS, GRAVITY_GRADIENT, HEAVY_TOP, gradient, orbit_radial, term_constants,
-                    term_value, terms_lanes)
+from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient, orbit_radial, term_constants, term_value,
+                    terms_lanes)
 from .qalg import qconj, qmul
 
 
@@ -40,11 +39,8 @@ def eq7(q, Q, inertia):
 
 def _rhs(t, y, inertia, terms, params, table, work, dy):
     """Write ``dy/dt`` (eq. 7) into ``dy`` for the model ``terms, params, table`` (a model with
-    wheels or a control law: :func:`orbatt.core.gyrostat.rhs_extended`, compiled once and
-    called)."""
-    if (terms[0, FLAGS] & EXTENDED) != 0:
-        rhs_extended(t, y, inertia, terms, params, table, work, dy)
-        return
+    wheels or a control law, row 0's ``EXTENDED`` flag, takes
+    :func:`orbatt.core.gyrostat.rhs_extended` instead: the step loops choose it)."""
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
     qd, Qd = eq7(q, Q, inertia)

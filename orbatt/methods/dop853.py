@@ -7,6 +7,7 @@ import numpy as np
 
 from ..core import dop853 as kd
 from ..core import dop853_lanes as kdl
+from ..core import model as km
 from ..core import potentials as kp
 from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
@@ -46,9 +47,10 @@ class DOP853(Method):
         E = p.members
         self.Y = p.y0.copy()
         width = p.y0.shape[1]
-        # the rigid body's loop, or the one for wider states (a gyrostat's wheels)
-        self.one, self.batch = ((kd.advance, kd.advance_batch) if width == kd.NDIM else
-                                (kd.advance_wide, kd.advance_batch_wide))
+        # the rigid body's loop, or the one of extended models (wheels, control laws)
+        extended = (p.kernel.terms[0, km.FLAGS] & km.EXTENDED) != 0 or width != kd.NDIM
+        self.one, self.batch = ((kd.advance_wide, kd.advance_batch_wide) if extended else
+                                (kd.advance, kd.advance_batch))
         self.ST, self.CNT, self.F0 = kd.new_state(E, width)
         self.ST[:, kd.ST_T] = p.t0
         if self.step is not None:

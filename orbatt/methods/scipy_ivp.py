@@ -1,5 +1,6 @@
 """The reference path: scipy's ODE solvers (:mod:`scipy.integrate`, the classes behind
-``solve_ivp``) on the compiled right-hand side (:func:`orbatt.core.hamiltonian.rhs`),
+``solve_ivp``) on the compiled right-hand side (:func:`orbatt.core.hamiltonian.rhs`, or
+:func:`orbatt.core.gyrostat.rhs_extended` for wheels and control),
 registered as ``"scipy-DOP853"``, ``"scipy-RK45"``, ``"scipy-RK23"``, ``"scipy-Radau"``,
 ``"scipy-BDF"``, ``"scipy-LSODA"``."""
 from __future__ import annotations
@@ -8,6 +9,8 @@ import numpy as np
 
 from ..core import dop853 as kd
 from ..core import potentials as kp
+from ..core import model as km
+from ..core.gyrostat import rhs_extended
 from ..core.hamiltonian import rhs
 from ..errors import IntegrationError
 from .base import Method, budget_limit, register
@@ -56,10 +59,11 @@ class Scipy(Method):
         work = kp.new_work()
         counter = self.nfev
         width = self.p.y0.shape[1]
+        f = rhs_extended if (kernel.terms[0, km.FLAGS] & km.EXTENDED) != 0 else rhs
 
         def fun(t, y):
             dy = np.empty(width)
-            rhs(t, np.ascontiguousarray(y, dtype=np.float64), inertia, *kernel, work, dy)
+            f(t, np.ascontiguousarray(y, dtype=np.float64), inertia, *kernel, work, dy)
             counter[e] += 1
             return dy
 
