@@ -168,9 +168,10 @@ class RigidBody:
         if self.dimensionless:
             return f"RigidBody(inertia={_numbers(self._value)} (dimensionless))"
         in_m2 = self._value * 1e6
+        wheels = f", {len(self.wheels)} reaction wheels" if self.wheels else ""
         if np.max(in_m2) < REPR_KM2_FROM:
-            return f"RigidBody(inertia={_numbers(in_m2)} kg m^2)"
-        return f"RigidBody(inertia={_numbers(self._value)} kg km^2)"
+            return f"RigidBody(inertia={_numbers(in_m2)} kg m^2{wheels})"
+        return f"RigidBody(inertia={_numbers(self._value)} kg km^2{wheels})"
 
     def __eq__(self, other):
         return (isinstance(other, RigidBody) and self.dimensionless == other.dimensionless
