@@ -13,6 +13,8 @@ import orbatt
 from orbatt import canonical as cn
 from orbatt import quaternion as qt
 
+from control_support import angle
+
 #: a small spacecraft (kg m^2, rotors locked) with three orthogonal wheels and a skewed one
 INERTIA = np.array([0.05, 0.06, 0.02])
 AXES = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
@@ -27,12 +29,6 @@ T_END = 1e4                                                       # s
 def gyrostat(inertia=INERTIA, axes=AXES, rotor=ROTOR, speed=SPEED):
     wheels = [orbatt.ReactionWheel(a, Iw * u.kg * u.m**2, s * u.rad / u.s) for a, Iw, s in zip(axes, rotor, speed)]
     return orbatt.RigidBody(np.asarray(inertia) * u.kg * u.m**2, wheels=wheels)
-
-
-def angle(qa, qb):
-    """Rotation angle (rad) between attitudes, precise for small angles."""
-    d = qt.mul(qt.conj(qa), qb)
-    return 2.0 * np.arcsin(np.minimum(1.0, np.linalg.norm(d[..., 1:], axis=-1)))
 
 
 def locked_out(inertia, axes, rotor):
