@@ -175,3 +175,16 @@ def test_axisymmetric_gyrostat_closed_form():
           f"omega {np.abs(omega - w_ref).max():.3g} rad/s")
     assert err.max() < 1e-10
     np.testing.assert_allclose(omega, w_ref, rtol=0, atol=3e-11 * np.linalg.norm(w0))
+
+
+def test_scipy_methods_integrate_the_gyrostat():
+    """scipy's DOP853 on the same state (q, Q, h) agrees with orbatt's DOP853 (measured 8.2e-12
+    rad over 2000 s at rtol 1e-12)."""
+    body = gyrostat()
+    t = np.linspace(0.0, 2000.0, 11)
+    s0 = orbatt.State.from_omega(body, Q0, OMEGA0 * u.rad / u.s)
+    a, b = (orbatt.propagate(body, s0, orbatt.TorqueFree(), t, method=m, rtol=1e-12, atol=1e-14)
+            for m in ("dop853", "scipy-DOP853"))
+    print(f"dop853 vs scipy-DOP853: {angle(a.q, b.q).max():.3g} rad")
+    assert angle(a.q, b.q).max() < 1e-10
+    np.testing.assert_array_equal(b.wheel_momenta, a.wheel_momenta)
