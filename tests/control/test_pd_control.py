@@ -112,3 +112,41 @@ def test_the_orbital_offset_is_the_identity_by_default():
                 np.zeros(3), 600.0)[0].q for tq in (None, [1.0, 0.0, 0.0, 0.0], rotation([0, 1, 0], 0.2))]
     assert np.array_equal(runs[0], runs[1])
     assert angle(runs[0][-1], runs[2][-1]) > 0.05
+
+
+def test_pd_points_an_axis_at_the_sun_with_the_rate_lag():
+    """``target = "sun"``: body axis 3 turned from 127 deg onto the Sun. The law takes the
+    target's rate as 0, so in the steady state the body follows the Sun's direction (its rate
+    ``w_d = d x d'``, ~2e-7 rad/s: the Earth's year plus the orbit's parallax) with the
+    proportional term balancing the damping: ``kp Im(q_e) = -kd w_d``, a lag of
+    ``2 kd |w_d| / kp`` (2.0e-3 deg here). Measured: 127 deg -> 0.1 deg in 1200 s; the lag within
+    1.8 % of the estimate over the last 1200 s (the transient's tail and the parallax's changing
+    rate, at the orbit's frequency, leave the rest)."""
+    from astropy.time import Time
+
+    from orbatt.environment.sun import sun_position
+
+    epoch = Time("2024-06-01T00:00:00", scale="utc")
+    orbit = orbatt.KeplerOrbit(6878.137 * u.km, 0.0, 97.4 * u.deg, 30 * u.deg, 0 * u.deg, epoch=epoch)
+    body = orbatt.RigidBody(INERTIA * u.kg * u.m**2)
+    kp, kd = 2e-3, 0.16
+    pd = orbatt.PDControl("sun", kp=f"{kp} N m", kd=f"{kd} N m s", max_torque=f"{MAX_TORQUE} N m",
+                          target_axis=[0.0, 0.0, 1.0])
+    t_end = 4000.0
+    env = orbatt.EnvironmentTorques(orbit, t_end * u.s, gravity_gradient=False, control=pd)
+    s0 = orbatt.State.from_omega(body, [0.8, 0.3, -0.4, 0.331662479035540], np.deg2rad([0.1, -0.2, 0.1]) * u.rad / u.s)
+    t = np.linspace(0.0, t_end, 401)
+    tr = orbatt.propagate(body, s0, env, t, method="dop853", rtol=1e-10, atol=1e-10)
+    d = sun_position(epoch + t * u.s) - orbit.state(t)[0]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    axis = qt.rotate(tr.q, np.array([0.0, 0.0, 1.0]))
+    err = np.arccos(np.clip(np.einsum("ni,ni->n", axis, d), -1.0, 1.0))
+    w_d = np.linalg.norm(np.cross(d, np.gradient(d, t, axis=0)), axis=1)
+    late = t >= 2800.0
+    lag = 2 * kd * w_d / kp
+    print(f"sun pointing: {np.rad2deg(err[0]):.4g} deg -> {np.rad2deg(err[t == 1200.0][0]):.3g} deg at 1200 s; "
+          f"lag {np.rad2deg(err[late]).mean():.4g} deg, estimate {np.rad2deg(lag[late]).mean():.4g} deg, "
+          f"largest relative difference {np.abs(err[late] / lag[late] - 1).max():.3g}")
+    assert np.rad2deg(err[0]) > 120.0 and np.rad2deg(err[t == 1200.0][0]) < 0.5
+    np.testing.assert_allclose(err[late], lag[late], rtol=0.05)
+    assert np.abs(outputs(tr, env).tau).max() <= MAX_TORQUE * (1 + 1e-12)
