@@ -4,23 +4,13 @@
 and ``benchmarks/README.md``."""
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "basilisk_control.py"
-
 
 @pytest.fixture(scope="module")
-def bench():
-    if not SCRIPT.exists():
-        pytest.skip(f"{SCRIPT} not found (tests run outside a source checkout)")
-    spec = importlib.util.spec_from_file_location("basilisk_control", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def bench(load_benchmark):
+    return load_benchmark("basilisk_control")
 
 
 @pytest.fixture(scope="module")
