@@ -72,6 +72,8 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
+    if target != TARGET_SUN and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
+        raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
     head = [float(target), kp, kd, max_torque, ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, *c]
     if wheel_axes is None:
         return np.array(head, dtype=np.float64)

@@ -113,3 +113,15 @@ def test_methods_without_the_extended_state_refuse_wheels_and_control(method):
     assert "dop853" in message
     env = orbatt.EnvironmentTorques(ORBIT, 10 * u.s, control=orbatt.PDControl(**PD))
     raises("method", propagate, orbatt.RigidBody(INERTIA), env, method=method)
+
+
+def test_pd_params_refuses_a_target_quaternion_that_is_not_unit():
+    """The kernel's PD row: an orbital or inertial target needs a unit quaternion (an all-zero
+    one would silently turn the proportional term into nonsense)."""
+    from orbatt.core import control as kc
+
+    for target in (kc.TARGET_ORBITAL, kc.TARGET_INERTIAL):
+        with pytest.raises(ValueError, match="unit quaternion"):
+            kc.pd_params(target, 1.0, 1.0, np.inf, (0.0, 0.0, 0.0, 0.0))
+    assert kc.pd_params(kc.TARGET_ORBITAL, 1.0, 1.0, np.inf)[5:9].tolist() == [1.0, 0.0, 0.0, 0.0]
+    assert kc.pd_params(kc.TARGET_SUN, 1.0, 1.0, np.inf, (0.0, 0.0, 1.0))[5:9].tolist() == [0.0, 0.0, 1.0, 0.0]
