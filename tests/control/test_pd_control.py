@@ -29,7 +29,7 @@ def test_pd_holds_the_orbital_frame_from_tens_of_degrees():
     """From 37 deg off the orbital frame and 0.54 deg/s, with the torque saturated at first:
     the attitude error falls below 1e-3 deg within one orbit and the body turns with O; the
     commanded torque never exceeds max_torque. Measured: 1.1e-4 deg after 5400 s, the torque
-    at its limit for the first ~400 s."""
+    at its limit on and off for the first 500 s."""
     body = orbatt.RigidBody(INERTIA * u.kg * u.m**2)
     pd = orbatt.PDControl("orbital", kp="5e-4 N m", kd="8e-2 N m s", max_torque=f"{MAX_TORQUE} N m")
     q_bo = qt.mul(rotation([1, 0, 0], 0.5), rotation([0, 1, 0], -0.4))
