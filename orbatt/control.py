@@ -146,9 +146,9 @@ class PDControl:
     Parameters
     ----------
     target : {"orbital", "inertial", "sun"}
-        Hold the body axes on the orbital frame O (``q_orbital`` -> identity), on the attitude
-        ``target_q`` (inertial, scalar first), or point the body axis ``target_axis`` at the Sun
-        (needs the orbit's epoch).
+        Hold the body axes on the orbital frame O (``q_orbital`` -> identity, or -> ``target_q``
+        when given), on the attitude ``target_q`` (inertial, scalar first), or point the body
+        axis ``target_axis`` at the Sun (needs the orbit's epoch).
     kp : Quantity (N m)
         Torque per unit quaternion error.
     kd : Quantity (N m s)
@@ -158,6 +158,12 @@ class PDControl:
     actuator : {"ideal", "wheels"}
         An ideal external torque, or the body's reaction wheels (their axes must span three
         dimensions; their limits apply).
+    target_q : 4 floats, optional
+        The target attitude, scalar first: target -> inertial S (``target = "inertial"``,
+        required), or target -> orbital O (``target = "orbital"``, optional: a constant offset
+        from the orbital frame such as a roll, default identity).
+    target_axis : 3 floats, optional
+        The unit body axis to point at the Sun (``target = "sun"``, required).
     """
 
     law = "pd"
@@ -173,15 +179,16 @@ class PDControl:
         self.kd = _value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
         self.max_torque = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
         self.target_q = self.target_axis = None
-        if target == "inertial":
-            if target_q is None:
-                raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
+        if target == "inertial" and target_q is None:
+            raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
+        if target_q is not None:
+            if target == "sun":
+                raise InputError("target_q: only for target = 'inertial' or 'orbital' (target is 'sun'; "
+                                 "give target_axis)")
             tq = np.asarray(target_q, dtype=np.float64)
             if tq.shape != (4,) or not np.all(np.isfinite(tq)) or abs(np.linalg.norm(tq) - 1) > AXIS_TOLERANCE:
                 raise InputError(f"target_q: {target_q!r} is not a unit quaternion [w, x, y, z]")
             self.target_q = tq / np.linalg.norm(tq)
-        elif target_q is not None:
-            raise InputError(f"target_q: only for target = 'inertial' (target is {target!r})")
         if target == "sun":
             if target_axis is None:
                 raise InputError("target_axis: target = 'sun' needs the body axis to point at the Sun, e.g. [0, 0, 1]")
@@ -193,8 +200,8 @@ class PDControl:
         """The :data:`~orbatt.core.model.PD_CONTROL` row for a body with ``wheels`` (internal
         units); ``sun_table``: the Sun's position along the orbit (``target = sun``)."""
         tmax = np.inf if self.max_torque is None else self.max_torque * _N_M
-        values = (self.target_q if self.target == "inertial" else
-                  self.target_axis if self.target == "sun" else (0.0, 0.0, 0.0, 0.0))
+        values = (self.target_axis if self.target == "sun" else
+                  self.target_q if self.target_q is not None else (1.0, 0.0, 0.0, 0.0))
         axes = None
         if self.actuator == "wheels":
             if not wheels:

@@ -7,12 +7,30 @@ settings.register_profile("orbatt", deadline=None)
 settings.load_profile("orbatt")
 
 
+import importlib.util
 import warnings
 from pathlib import Path
 
 import pytest
 
 SHIPPED = Path(__file__).parent.parent / "scenarios"
+BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
+
+
+@pytest.fixture(scope="session")
+def load_benchmark():
+    """``load(name)``: the module of the script ``benchmarks/<name>.py`` (the test is skipped
+    outside a source checkout)."""
+    def load(name):
+        script = BENCHMARKS / f"{name}.py"
+        if not script.exists():
+            pytest.skip(f"{script} not found (tests run outside a source checkout)")
+        spec = importlib.util.spec_from_file_location(name, script)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load
 
 
 @pytest.fixture(scope="session")

@@ -4,24 +4,15 @@ quaternion kinematics in scipy, the flat-plate formulas written again) and again
 ``benchmarks/basilisk_environment.py``; the measured numbers are in ``benchmarks/README.md``."""
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "basilisk_environment.py"
-
 
 @pytest.fixture(scope="module")
-def bench():
-    if not SCRIPT.exists():
-        pytest.skip(f"{SCRIPT} not found (tests run outside a source checkout)")
-    spec = importlib.util.spec_from_file_location("basilisk_environment", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def bench(load_benchmark):
+    return load_benchmark("basilisk_environment")
 
 
 @pytest.fixture(scope="module")

@@ -12,14 +12,16 @@ Parameter layouts (rows of the term list, :mod:`orbatt.core.model`)
 * PD control (:data:`~orbatt.core.model.PD_CONTROL`): :func:`pd_params`:
   ``[target, kp, kd, tau_max, actuator, c0, c1, c2, c3, then for wheels the (n, 3)
   pseudo-inverse of the (3, n) matrix of spin axes]``; ``c`` is the target quaternion
-  (``target = inertial``) or the body axis to point at the Sun (``target = sun``).
+  (``target = inertial``: target -> S; ``target = orbital``: target -> O, identity by
+  default) or the body axis to point at the Sun (``target = sun``).
 * B-dot (:data:`~orbatt.core.model.BDOT_CONTROL`): ``[gain, m_max]``.
 
 The PD law (``q_e = q_t~ q``, ``tau = -kp sgn(q_e0) Im(q_e) - kd (omega - omega_t)``, each
 axis clipped to ``tau_max``) with the targets:
 
-* ``orbital``: ``q_t = p``, the orbital frame O of the orbit's ``(r, v)`` (``DESIGN.md`` §1), and
-  ``omega_t = (r x v) / r^2`` in body axes: O's rate about its normal (exact for a Keplerian
+* ``orbital``: ``q_t = p c``, the orbital frame O of the orbit's ``(r, v)`` (``DESIGN.md`` §1)
+  turned by the constant offset ``c`` (identity: hold O itself), and ``omega_t = (r x v) / r^2``
+  in body axes: O's rate about its normal, which the offset frame shares (exact for a Keplerian
   orbit; its component along ``o1``, from an acceleration off the orbit plane, is left out:
   below 2e-6 rad/s for J2 in LEO).
 * ``inertial``: a constant ``q_t``, ``omega_t = 0``.
@@ -64,11 +66,14 @@ def wheel_params(axes, inertia, max_torque, max_speed):
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None):
     """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
     :data:`TARGET_ORBITAL`, :data:`TARGET_INERTIAL`, :data:`TARGET_SUN`; ``target_values``:
-    the target quaternion or the body axis (padded to 4); ``wheel_axes (n, 3)``: actuate with
+    the target quaternion (relative to the orbital frame for ``TARGET_ORBITAL``; default
+    identity) or the body axis (padded to 4); ``wheel_axes (n, 3)``: actuate with
     these wheels (their axes must span the three dimensions), else an ideal torque."""
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
+    if target != TARGET_SUN and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
+        raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
     head = [float(target), kp, kd, max_torque, ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, *c]
     if wheel_axes is None:
         return np.array(head, dtype=np.float64)
@@ -159,8 +164,9 @@ def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
         s_b = rotate_inv(q, (dx / d, dy / d, dz / d))
         qe = pointing_error(s_b, (params[p0 + 5], params[p0 + 6], params[p0 + 7]))
     else:
-        if target == TARGET_ORBITAL:
-            qt, wt_s = orbital_target(r, xhat, v)
+        if target == TARGET_ORBITAL:  # the frame O turned by the constant offset c (O -> target)
+            p, wt_s = orbital_target(r, xhat, v)
+            qt = qmul(p, (params[p0 + 5], params[p0 + 6], params[p0 + 7], params[p0 + 8]))
             wt = rotate_inv(q, wt_s)
         else:
             qt = (params[p0 + 5], params[p0 + 6], params[p0 + 7], params[p0 + 8])
