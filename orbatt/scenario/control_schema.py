@@ -4,7 +4,8 @@
 ```toml
 [control]
 law = "pd"                      # | "bdot"
-target = "orbital"              # | "inertial" (with target_q = [w, x, y, z]) | "sun" (with target_axis)
+target = "orbital"              # | "inertial" (with target_q = [w, x, y, z]) | "sun" (with target_axis);
+                                # orbital takes an optional target_q: the attitude relative to O
 kp = "5e-4 N m"                 # PD: torque per unit quaternion error
 kd = "1e-2 N m s"
 max_torque = "2e-4 N m"         # per-axis saturation
@@ -154,13 +155,12 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
           "actuator": actuator}
     if "max_torque" in c:
         kw["max_torque"] = _positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m) * u.N * u.m
-    if target == "inertial":
-        if "target_q" not in c:
-            raise ctx.error("[control] target_q", "missing; target = 'inertial' needs the attitude target_q = "
-                                                  "[w, x, y, z]")
+    if target == "inertial" and "target_q" not in c:
+        raise ctx.error("[control] target_q", "missing; target = 'inertial' needs the attitude target_q = [w, x, y, z]")
+    if "target_q" in c:
+        if target == "sun":
+            raise ctx.error("[control] target_q", "only read with target = 'inertial' or 'orbital' (target is 'sun')")
         kw["target_q"] = parse_plain_vector(ctx, "[control] target_q", c["target_q"], 4)
-    elif "target_q" in c:
-        raise ctx.error("[control] target_q", f"only read with target = 'inertial' (target is {target!r})")
     if target == "sun":
         if "target_axis" not in c:
             raise ctx.error("[control] target_axis", "missing; target = 'sun' needs the body axis to point at the Sun")

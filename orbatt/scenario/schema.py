@@ -123,7 +123,8 @@ KEY_DOCS = {
         "law": ("'pd' | 'bdot'", "required", "quaternion PD feedback, or B-dot detumbling with magnetorquers"),
         "target": ("'orbital' | 'inertial' | 'sun'", "'orbital'", "pd: hold the orbital frame (q_orbital -> 1), the "
                    "attitude target_q, or point target_axis at the Sun (needs [orbit] epoch)"),
-        "target_q": ("plain, 4 values", "required for inertial", "pd: target attitude [w, x, y, z], body -> inertial"),
+        "target_q": ("plain, 4 values", "required for inertial", "pd: target attitude [w, x, y, z], body -> inertial; "
+                     "with target = 'orbital' (optional) the held attitude relative to the orbital frame"),
         "target_axis": ("plain, 3 values", "required for sun", "pd: unit body axis to point at the Sun"),
         "kp": ("torque (N m)", "required for pd", "torque per unit quaternion error"),
         "kd": ("torque x time (N m s)", "required for pd", "torque per unit rate error (rad/s)"),

@@ -72,6 +72,9 @@ BAD = [
     (WHEELS, 'target = "orbital"', 'target = "sun"\ntarget_axis = [0.0, 0.0, 1.0]', "[orbit] epoch"),
     (WHEELS, 'target = "orbital"', 'target = "sun"', "[control] target_axis"),
     (WHEELS, 'law = "pd"', 'law = "lqr"', "[control] law"),
+    (WHEELS, 'target = "orbital"', 'target = "orbital"\ntarget_q = [1.0, 0.1, 0.0, 0.0]', "[control] target_q"),
+    (WHEELS, 'target = "orbital"', 'target = "sun"\ntarget_axis = [0.0, 0.0, 1.0]\ntarget_q = [1.0, 0.0, 0.0, 0.0]',
+     "[control] target_q"),
     (WHEELS, 'actuator = "wheels"', 'actuator = "thrusters"', "[control] actuator"),
     (WHEELS, 'method = "dop853"', 'method = "splitting4"\nstep = "10 s"', "[integration] method"),
     (WHEELS, 'inertia = "4e-4 kg m2"', 'inertia = "1.9 kg m2"', "[[body.wheels]] inertia"),
@@ -91,6 +94,19 @@ def test_bad_control_input_names_the_key(text, old, new, key):
         parse(text.replace(old, new, 1), "s.toml")
     msg = str(err.value)
     assert key in msg and "\n" not in msg, msg
+
+
+def test_orbital_target_with_an_offset(tmp_path):
+    """``target_q`` with target = 'orbital': the attitude held relative to the orbital frame."""
+    roll = [float(np.cos(np.radians(10))), float(np.sin(np.radians(10))), 0.0, 0.0]  # 20 deg about o1
+    p = tmp_path / "offset.toml"
+    p.write_text(_short(WHEELS.replace('target = "orbital"', f'target = "orbital"\ntarget_q = {roll}'), '"1 orbits"'))
+    ds = load_scenario(p).run()
+    qo = ds.q_orbital.values[-1]
+    # q_orbital ends near the 20 deg roll about o1 (within the steady error of the hold)
+    rel = np.degrees(2 * np.arccos(min(1.0, abs(float(np.dot(qo, roll))))))
+    assert rel < 2.5
+    assert abs(np.degrees(2 * np.arccos(min(1.0, abs(qo[0])))) - 20.0) < 2.5
 
 
 def test_control_without_an_orbit_is_refused():
