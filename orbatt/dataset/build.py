@@ -22,8 +22,10 @@ from ..body import RigidBody
 from ..epoch import iso_epoch
 from ..errors import InputError
 from ..orbital import lvlh_angles
+from ..orbits.base import OrbitProvider
 from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from ..version import __version__
+from .assembly import assemble, variable
 
 #: why ``q``/``Q`` and ``g``/``G`` differ only in case (CF §2.3 advises against it): the names
 #: are the paper's notation, which every equation of the documentation uses
@@ -87,11 +89,14 @@ def cf_variable(dims, data, units, long_name, **extra):
     ``extra`` ones)."""
     attrs = {"units": units, "long_name": long_name}
     attrs.update(extra)
-    return xr.Variable(dims, data, attrs)
+    return variable(dims, data, attrs)
 
 
 def _quat_attrs(frames, maps):
     return {"quaternion_order": QUATERNION_ORDER, "frames": frames, "convention": maps}
+
+
+_KM_PER_S = u.km / u.s
 
 
 def _plain(x, unit):
@@ -234,10 +239,8 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     epoch_s = None if dimless else iso_epoch(epoch)
 
     # --- state and derived quantities (orbatt.canonical / quaternion / potential) ---
-    g = cn.body_momentum(q, Q)
-    omega = cn.body_rate(q, Q, inert_b)
+    g, omega, T = cn.body_quantities(q, Q, inert_b)
     G = cn.space_momentum(q, Q)
-    T = cn.kinetic_energy(q, Q, inert_b)
     norm_err, qQ = cn.constraint_residuals(q, Q)
     if ens:
         Upot = np.stack([_potential_energy(tr.potential, _member_body(body, inertia[e]), t, q[e])
@@ -255,14 +258,14 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
                                                       "time since the start"),
                   "standard_name": "time", "axis": "T"}
     coords = {
-        "time": xr.Variable(("time",), t, time_attrs),
+        "time": variable(("time",), t, time_attrs),
         "quat": cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
-        "quat_label": xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
+        "quat_label": variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
         "axis": cf_variable(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
-        "axis_label": xr.Variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
+        "axis_label": variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
         "euler_313_angle": cf_variable(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
-        "euler_313_label": xr.Variable(("euler_313_angle",), np.array(EULER_313_LABELS),
+        "euler_313_label": variable(("euler_313_angle",), np.array(EULER_313_LABELS),
                                        {"long_name": "3-1-3 Euler angle name"}),
     }
     if ens:
@@ -292,16 +295,15 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     }
 
     if orbit is not None:
-        r = _plain(orbit.radius(t), u.km)
-        p = _plain(orbit.orbital_quaternion(t), u.one)
-        nu = _plain(orbit.true_anomaly(t), u.rad)
-        pos, vel = orbit.state(t)
-        pos = _plain(pos, u.km)
-        vel = _plain(vel, u.km / u.s)
+        # a provider without quantities() (any object with the contract's methods): one by one
+        r, p, nu, pos, vel = (orbit.quantities(t) if hasattr(orbit, "quantities")
+                              else OrbitProvider.quantities(orbit, t))
+        r, p, nu = _plain(r, u.km), _plain(p, u.one), _plain(nu, u.rad)
+        pos, vel = _plain(pos, u.km), _plain(vel, _KM_PER_S)
         q_orb = qt.mul(qt.conj(p), q)
         roll, pitch, yaw = lvlh_angles(q_orb)
         coords["euler_321_angle"] = cf_variable(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
-        coords["euler_321_label"] = xr.Variable(("euler_321_angle",), np.array(EULER_321_LABELS),
+        coords["euler_321_label"] = variable(("euler_321_angle",), np.array(EULER_321_LABELS),
                                                 {"long_name": "3-2-1 Euler angle name"})
         data.update({
             "r": cf_variable(("time",), r, U["length"], "orbit radius"),
@@ -324,7 +326,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title)
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return assemble(data, coords, attrs)
 
 
 #: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m

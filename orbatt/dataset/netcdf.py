@@ -80,17 +80,17 @@ def check_engine(engine):
 def encode(ds: xr.Dataset) -> xr.Dataset:
     """The file form: CF time reference (the epoch, or :data:`NOMINAL_REFERENCE` for a
     dimensional run without one), no stale encodings."""
-    out = ds.drop_encoding()
+    out = ds.drop_encoding()  # new variables (attribute dicts copied, data shared)
     if "time" not in ds.coords or ds["time"].attrs.get("units") != "s":
         return out  # a dimensionless time ("1") has no CF time reference
     epoch = ds.attrs.get("epoch")
-    attrs = dict(ds["time"].attrs)
+    attrs = out["time"].attrs  # out's own copy: ds keeps its attributes
     if epoch:
         attrs.update(units=f"seconds since {epoch}", calendar="standard", units_metadata=LEAP_SECONDS)
     else:
         attrs.update(units=f"seconds since {NOMINAL_REFERENCE}", calendar="proleptic_gregorian",
                      units_metadata="leap_seconds: none", comment=NOMINAL_COMMENT)
-    return out.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs))
+    return out
 
 
 def decode(ds: xr.Dataset) -> xr.Dataset:
