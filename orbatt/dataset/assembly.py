@@ -33,6 +33,12 @@ def variable(dims, data, attrs) -> xr.Variable:
     return xr.Variable(dims, data, attrs)
 
 
+def _as_variable(var):
+    """``var`` if it is an :class:`xarray.Variable`, else the variable of its ``dims``,
+    ``values`` and ``attrs`` (an :class:`orbatt.dataset.content.Var`)."""
+    return var if isinstance(var, xr.Variable) else variable(var.dims, var.values, var.attrs)
+
+
 def _sizes(variables):
     """``{dim: size}`` in order of first appearance; a size that disagrees raises."""
     sizes = {}
@@ -48,12 +54,13 @@ def assemble(data_vars, coords, attrs, *, direct=True) -> xr.Dataset:
 
     Parameters
     ----------
-    data_vars, coords : dict of str -> xarray.Variable
-        The data variables and the coordinates, in the order the Dataset lists them. A
+    data_vars, coords : dict of str -> xarray.Variable or Var
+        The data variables and the coordinates (:class:`xarray.Variable` or anything with
+        ``dims``, ``values`` and ``attrs``), in the order the Dataset lists them. A
         coordinate named after its only dimension (``time``, ``quat`` ...) gets xarray's
         default pandas index, as with the public constructor.
     attrs : dict
-        Global attributes (kept as given, not copied).
+        Global attributes (copied).
     direct : bool
         False: use the public constructor (the reference the direct path is tested against).
 
@@ -62,9 +69,12 @@ def assemble(data_vars, coords, attrs, *, direct=True) -> xr.Dataset:
     xarray.Dataset
         Data variables first, then coordinates, each in the given order.
     """
+    data_vars = {k: _as_variable(v) for k, v in data_vars.items()}
+    coords = {k: _as_variable(v) for k, v in coords.items()}
     construct = getattr(xr.Dataset, "_construct_direct", None)
     if not direct or construct is None:
         return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    attrs = dict(attrs)
     variables = dict(data_vars)
     indexes = {}
     for name, var in coords.items():

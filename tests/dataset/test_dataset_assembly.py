@@ -2,6 +2,7 @@
 without importing dask."""
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -55,8 +56,9 @@ def test_variable_wraps_arrays_and_converts_the_rest():
 def test_a_run_imports_no_dask():
     """Building a run's Dataset does not import dask (or pint, sparse: xarray's duck-array
     checks import them the first time a Variable is made the usual way, ~0.5 s)."""
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "paper-torque-free.toml"
     code = ("import sys, warnings; warnings.simplefilter('ignore'); import orbatt; "
-            "orbatt.load_scenario('paper-torque-free').run(); "
+            f"orbatt.load_scenario({str(path)!r}).run(); "
             "print(sorted(m for m in ('dask', 'pint', 'sparse', 'distributed') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
