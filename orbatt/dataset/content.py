@@ -24,6 +24,14 @@ class Var(NamedTuple):
     values: np.ndarray
     attrs: dict
 
+    @property
+    def dtype(self):
+        return self.values.dtype
+
+    @property
+    def shape(self):
+        return self.values.shape
+
 
 class Content:
     """The variables and global attributes of a Dataset before xarray.
