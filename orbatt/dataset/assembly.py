@@ -79,26 +79,33 @@ def assemble(data_vars, coords, attrs, *, direct=True) -> xr.Dataset:
     indexes = {}
     for name, var in coords.items():
         if var.dims == (name,):
-            index = _index(name, var.values)
-            indexes[name] = index
-            variables.update(index.create_variables({name: var}))
+            indexes[name], variables[name] = _indexed(name, var)
         else:
             variables[name] = var
     return construct(variables, set(coords), _sizes(variables), attrs, indexes)
 
 
-#: the indexes of the small integer coordinates (``quat``, ``axis`` ...), made once: xarray
-#: never changes an index in place (its operations make new ones), so Datasets share them
+#: ``(index, index variable)`` of the small integer coordinates (``quat``, ``axis`` ...),
+#: made once: xarray never changes an index in place (its operations make new ones), so
+#: Datasets share them; each Dataset gets its own variable (a shallow copy with its attributes)
 _SMALL_INDEXES = {}
 _SMALL = 64
 
 
-def _index(name, values):
-    """xarray's default index of the dimension coordinate ``name`` with ``values``."""
+def _indexed(name, var):
+    """xarray's default index of the dimension coordinate ``name`` and its index variable
+    (with ``var``'s attributes)."""
+    values = var.values
     key = (name, values.dtype.str, values.tobytes()) if values.size <= _SMALL and values.dtype.kind in "iu" else None
-    index = _SMALL_INDEXES.get(key) if key is not None else None
-    if index is None:
+    cached = _SMALL_INDEXES.get(key) if key is not None else None
+    if cached is None:
         index = PandasIndex(pd.Index(values), name, coord_dtype=values.dtype)
+        indexed = index.create_variables({name: var})[name]
         if key is not None and len(_SMALL_INDEXES) < 256:
-            _SMALL_INDEXES[key] = index
-    return index
+            _SMALL_INDEXES[key] = (index, indexed.copy(deep=False))
+        return index, indexed
+    index, template = cached
+    indexed = template.copy(deep=False)
+    indexed.attrs = var.attrs
+    indexed.encoding = var.encoding
+    return index, indexed

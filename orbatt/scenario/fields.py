@@ -129,14 +129,30 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
                 _PARSED[key] = x
         return _check_value(ctx, where, value, x, unit, bounds)
     x = float(value)
-    angle = unit == U.ANGLE
+    angle = _equal(unit, U.ANGLE)
     if angle and x != 0:
         raise ctx.error(where, f"{value!r} has no unit; an angle needs an angle unit: write '{value} deg' or "
                                f"'{value} rad'")
-    if not (angle or unit == U.DIMENSIONLESS or dimensionless):
+    if not (angle or dimensionless or _equal(unit, U.DIMENSIONLESS)):
         raise ctx.error(where, f"{value!r} has no unit; write it as a quantity string such as "
                                f"'{value} {unit.to_string()}'")
     return _check_value(ctx, where, value, x, unit, bounds)
+
+
+#: ``(unit, other) -> unit == other``: astropy's comparison of two units (~20 us: it converts
+#: one into the other) for the few pairs a scenario compares
+_EQUAL = {}
+
+
+def _equal(unit, other) -> bool:
+    """``unit == other``, remembered per pair."""
+    key = (unit, other)
+    same = _EQUAL.get(key)
+    if same is None:
+        same = bool(unit == other)
+        if len(_EQUAL) < 1024:
+            _EQUAL[key] = same
+    return same
 
 
 #: ``(text, unit, dimensionless, unit registry) -> value``: quantity strings parsed before
@@ -148,7 +164,7 @@ _PARSED = {}
 def _parse_quantity_string(ctx, where, value, unit, dimensionless):
     """The value of the quantity string ``value`` in ``unit`` (:func:`parse_quantity`'s rules
     but the range check)."""
-    angle = unit == U.ANGLE
+    angle = _equal(unit, U.ANGLE)
     number, qunit = _split_quantity(ctx, where, value, unit)
     if angle and qunit.physical_type != "angle":
         what = "no unit" if qunit == U.DIMENSIONLESS else f"the unit {qunit.to_string()!r} ({qunit.physical_type})"
