@@ -98,11 +98,17 @@ def first_runs(heyoka_tol=None, warm_repeats=3):
     return rows
 
 
+#: attitude error the environment-torque ensemble is run to: the tabulated environment (cubic
+#: splines, the shadow function's kinks at umbra and penumbra entry) keeps even a run at
+#: rtol 1e-14 about 2e-7 rad from the tight reference, so 1e-9 rad is out of reach here
+ENV_TARGET = 1e-6
+
+
 def environment_ensemble(n_members, repeats, median_time, angle, rtols):
     """``[(label, setting, max error, seconds, body-orbits/s)]``: ``dop853`` over one orbit of
     ``n_members`` cubesats (random attitudes and rates) with the gravity gradient alone and
     with drag, SRP and a residual dipole on six facets, each at the loosest tolerance for which
-    24 sampled members end within 1e-9 rad of a tight run."""
+    24 sampled members end within :data:`ENV_TARGET` of a tight run."""
     from astropy import units as u
     from astropy.time import Time
 
@@ -136,7 +142,7 @@ def environment_ensemble(n_members, repeats, median_time, angle, rtols):
         for rtol in rtols:
             q = orbatt.propagate(body, sample, pot, [0.0, T], rtol=rtol, atol=rtol).q[:, -1]
             err = max(angle(q[e], ref[e]) for e in range(24))
-            if err <= 1e-9:
+            if err <= ENV_TARGET:
                 break
         tm, tr = median_time(lambda: orbatt.propagate(body, states, pot, [0.0, T], rtol=rtol, atol=rtol), repeats,
                              budget_s=3.0)
@@ -155,7 +161,8 @@ def print_first_runs(rows, fmt_t):
 
 
 def print_environment_ensemble(rows, n_members, fmt_t):
-    print(f"\n## Ensemble with environment torques (cubesat in LEO, one orbit, N = {n_members}, dop853)\n")
+    print(f"\n## Ensemble with environment torques (cubesat in LEO, one orbit, N = {n_members}, dop853, "
+          f"<= {ENV_TARGET:.0e} rad on 24 sampled members)\n")
     print(f"{'model':<34} {'setting':<22} {'max error':>9} {'time':>9} {'body-orbits/s':>14} {'vs GG alone':>12}")
     base = rows[0][4]
     for label, setting, err, wall, rate in rows:

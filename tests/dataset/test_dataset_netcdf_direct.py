@@ -65,3 +65,26 @@ def test_orbatt_run_imports_neither_xarray_nor_dask(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "0 []"
     assert orbatt.open_dataset(tmp_path / "o.nc")["q"].shape == (1001, 4)
+
+
+def test_the_command_line_summary_reads_the_content_as_the_dataset():
+    from orbatt.cli import summary
+
+    sc = orbatt.load_scenario(SCENARIOS / "paper-torque-free.toml")
+    content = sc.run_content()
+    assert summary(content, title="t", wall=1.0) == summary(content.to_dataset(), title="t", wall=1.0)
+    assert "q" in content and content["q"].values.shape == (1001, 4) and content.sizes["time"] == 1001
+
+
+@pytest.mark.parametrize("order", ["orbatt first", "xarray first"])
+def test_the_accessor_is_registered_whoever_imports_xarray_first(order):
+    """import orbatt does not import xarray; ds.orbatt is there once xarray is imported."""
+    first, second = ("orbatt", "xarray") if order == "orbatt first" else ("xarray", "orbatt")
+    code = (f"import sys; import {first}; import {second}; import xarray as xr; "
+            "print(type(xr.Dataset(attrs={'method_settings': '{}'}).orbatt).__name__, "
+            "xr.Dataset(attrs={'method_settings': '{\"a\": 1}'}).orbatt.settings)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "OrbattAccessor {'a': 1}"
+    bare = subprocess.run([sys.executable, "-c", "import sys, orbatt; print('xarray' in sys.modules)"],
+                          capture_output=True, text=True, check=True)
+    assert bare.stdout.strip() == "False"
