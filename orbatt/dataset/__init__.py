@@ -65,13 +65,14 @@ from ..units import CF_UNITS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, parse_unit
 from .aem import read_aem, write_aem
 from .build import (AXIS_INDEX, AXIS_LABELS, CONVENTIONS, EULER_313_LABELS, EULER_321_LABELS, FRAMES,
                     LABEL_COORDS, QUAT_INDEX, QUAT_LABELS, QUATERNION_ORDER, REFERENCE, cf_variable,
-                    global_attrs, orbatt_version, to_dataset, to_json, utc_now)
+                    dataset_content, global_attrs, orbatt_version, to_dataset, to_json, utc_now)
+from .content import Content
 from .netcdf import (DEFAULT_CHUNK_TIME, TEMP_PREFIX, NetCDFWriter, check_engine, decode, encode, encoding,
                      open_dataset, write_netcdf)
 from .paths import check_output_path, file_name, is_orbatt_result
 
 __all__ = [
-    "to_dataset", "global_attrs", "open_dataset", "write_netcdf", "NetCDFWriter", "OrbattAccessor",
+    "to_dataset", "dataset_content", "Content", "global_attrs", "open_dataset", "write_netcdf", "NetCDFWriter", "OrbattAccessor",
     "read_aem", "write_aem", "check_output_path", "file_name", "is_orbatt_result", "TEMP_PREFIX",
     "cf_variable", "check_engine", "encode", "encoding", "decode", "iso_epoch", "to_json", "utc_now",
     "orbatt_version", "to_euler321", "lvlh_angles", "unit_string", "parse_unit",

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 from datetime import datetime, timezone
+from typing import TYPE_CHECKING
 
 import numpy as np
 from astropy import units as u
@@ -25,6 +26,9 @@ from ..orbits.base import OrbitProvider
 from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from ..version import __version__
 from .content import Content, Var
+
+if TYPE_CHECKING:  # annotations only: the Dataset is made by Content.to_dataset
+    import xarray
 
 #: why ``q``/``Q`` and ``g``/``G`` differ only in case (CF §2.3 advises against it): the names
 #: are the paper's notation, which every equation of the documentation uses

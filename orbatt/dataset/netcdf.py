@@ -28,6 +28,7 @@ import signal
 import sys
 import threading
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,6 +37,9 @@ from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, orbatt_version, utc_now
 from .content import Content, Var
 from .netcdf_direct import writable, write_content
+
+if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is read or made
+    import xarray as xr
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
            "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS"]
