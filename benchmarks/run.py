@@ -28,8 +28,15 @@ measured in the same run:
     Earth, GravityGradientEffector, RKF78 and RK4 at the largest task step reaching the target
     (plus the issue's settings RKF78 30 s, 10 s and RK4 1 s); time = ExecuteSimulation alone.
 
+Beside the ``dop853`` row of each case and target, the end-to-end row: ``load_scenario(path).run()``
+on a scenario file of the case at the same tolerance (parsing, building, the propagation and
+the xarray Dataset; ``end_to_end.py``). Then first runs in a fresh process: ``orbatt run`` of
+the shipped Keplerian scenario with an empty ``NUMBA_CACHE_DIR`` and warm, beside heyoka's first
+result in a fresh process (``--no-first-runs`` skips them: ~30 s of compilation).
+
 Then ensemble throughput: DOP853 body-orbits per second at <= 1e-9 rad after one orbit, and
-splitting body-steps per second, for N = 1e3 and 1e5 members.
+splitting body-steps per second, for N = 1e3 and 1e5 members; and an ensemble of cubesats with
+the gravity gradient plus drag, SRP and a residual dipole beside the gravity gradient alone.
 """
 from __future__ import annotations
 
@@ -67,14 +74,14 @@ try:  # optional baseline (d); its import time is reported
 except Exception as _exc:  # pragma: no cover - optional
     BSK_VERSION, BSK_IMPORT_S, BSK_ERROR = None, None, f"{type(_exc).__name__}: {_exc}"
 
-GM = 398600.4418
-A, ECC, INC, RAAN, ARGP = 7000.0, 0.2, math.pi / 6, math.pi / 4, math.pi / 12
-N_MEAN = math.sqrt(GM / A**3)
-PERIOD = 2 * math.pi / N_MEAN
-Q0 = np.array([0.5, -1 / math.sqrt(2), 0.0, 0.5])
-P0 = np.array([0.3, -0.848528, 0.141421, -1.5])
-P0 = P0 - (Q0 @ P0) * Q0
+from heyoka_model import A, ARGP, ECC, GM, INC, N_MEAN, P0, PERIOD, Q0, RAAN  # noqa: E402  (the problem)
+import heyoka_model  # noqa: E402
+
+import end_to_end  # noqa: E402
+
 TARGETS = (1e-6, 1e-9)
+#: heyoka's loosest tolerance reaching each target, by (case kind, target) (the first-run peer)
+HEYOKA_TOL = {}
 
 
 class Spec:
@@ -235,47 +242,13 @@ def run_scipy_model(case, model, rtol):
 
 
 def heyoka_integrator(case, tol):
-    """Eq. (7) with the tangential gradient (and heyoka's kepE for the orbit)."""
-    qs = hy.make_vars("q0", "q1", "q2", "q3")
-    ps = hy.make_vars("p0", "p1", "p2", "p3")
-    I = case.inertia
-
-    def mul(a, b):
-        a0, a1, a2, a3 = a
-        b0, b1, b2, b3 = b
-        return [a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-                a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0]
-
-    def conj(a):
-        return [a[0], -a[1], -a[2], -a[3]]
-
-    w = mul(conj(qs), ps)
-    a = [0.0, w[1] / I[0], w[2] / I[1], w[3] / I[2]]
-    qd, pd = mul(qs, a), mul(ps, a)
-    grad = [0.0] * 4
-    if case.kind == 2:
-        E = hy.kepE(ECC, N_MEAN * hy.time)
-        cE, sE = hy.cos(E), hy.sin(E)
-        rr = 1.0 - ECC * cE
-        cf, sf = (cE - ECC) / rr, math.sqrt(1 - ECC**2) * sE / rr
-        P, Qv = ORB[7:10], ORB[10:13]
-        X = [0.0] + [cf * P[k] + sf * Qv[k] for k in range(3)]
-        k3 = GM / (A * rr) ** 3
-        xb = mul(mul(conj(qs), X), qs)
-        Y = [0.0, I[0] * xb[1], I[1] * xb[2], I[2] * xb[3]]
-        graw = [-6.0 * k3 * c for c in mul(mul(X, qs), Y)]
-        n2 = sum(c * c for c in qs)
-        cdot = sum(qs[i] * graw[i] for i in range(4)) / n2
-        grad = [(graw[i] - cdot * qs[i]) / (n2 * n2) for i in range(4)]
-    sys_ = [(qs[i], 0.25 * qd[i]) for i in range(4)] + [(ps[i], 0.25 * pd[i] - grad[i]) for i in range(4)]
-    return sys_, hy.taylor_adaptive(sys_, list(Q0) + list(P0), tol=tol)
+    """Eq. (7) with the tangential gradient (and heyoka's kepE for the orbit):
+    :func:`heyoka_model.integrator`."""
+    return heyoka_model.integrator(case.inertia, case.kind == 2, tol)
 
 
 def run_heyoka(ta, case):
-    ta.time = 0.0
-    ta.state[:] = list(Q0) + list(P0)
-    ta.propagate_until(case.T)
-    return np.array(ta.state[:4])
+    return heyoka_model.propagate(ta, case.T)
 
 
 # ---------------------------------------------------------------------------------------
@@ -511,6 +484,10 @@ def work_precision(case, args, heyoka_available):
             integ = tr.stats["wall_time_s"]
             work = f"{tr.stats['steps']} st / {tr.stats['rhs_evaluations']} f"
             rows.append((target, method, f"rtol=atol {rtol:.1e}", err, work, tm, integ))
+            if method == "dop853":  # what a user calls: the scenario file to the Dataset
+                orbit = (GM, A, ECC, INC, RAAN, ARGP) if case.kind == 2 else None
+                rows.append(end_to_end.end_to_end_row(case, target, rtol, repeats, median_time, angle, Q0, P0,
+                                                      orbit))
         for method, order, n0 in fixed:
             if method == "splitting2" and target < 1e-7 and not args.full:
                 # ~2.5e7 steps (5 s per run): estimated from the 1e-6 row, not run
@@ -553,6 +530,7 @@ def work_precision(case, args, heyoka_available):
                     break
             if found:
                 tol, ta, err = found
+                HEYOKA_TOL[(case.kind, target)] = tol
                 tm, _ = median_time(lambda: run_heyoka(ta, case), repeats)
                 rows.append((target, f"(c) heyoka {hy.__version__}", f"tol {tol:.1e}", err, f"order {ta.order}", tm,
                              tm))
@@ -735,6 +713,8 @@ def main(argv=None):
     ap.add_argument("--full", action="store_true", help="also run Strang at 1e-9 (~2.5e7 steps)")
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--no-ensembles", action="store_true")
+    ap.add_argument("--no-first-runs", action="store_true",
+                    help="skip the fresh-process rows (orbatt run with an empty numba cache: ~30 s of compilation)")
     args = ap.parse_args(argv)
     if args.quick:
         args.repeats = 3
@@ -758,6 +738,8 @@ def main(argv=None):
     kep = kepler_case()
     for case in (kep, free):
         work_precision(case, args, hy is not None)
+    if not args.no_first_runs:
+        end_to_end.print_first_runs(end_to_end.first_runs(HEYOKA_TOL.get((2, 1e-9))), fmt_t)
     print("\n## Cost per step, Keplerian case (ns)")
     for k, v in ns_per_step(kep, args.repeats).items():
         print(f"  {k:<16} {v:7.0f} ns")
@@ -766,6 +748,9 @@ def main(argv=None):
         ensembles(kep, sizes, args.repeats)
         if hy is not None:
             heyoka_ensemble(kep, sizes, args.repeats)
+        n_env = 200 if args.quick else 1000  # the environment needs rtol ~1e-13 for 1e-6 rad (end_to_end.py)
+        end_to_end.print_environment_ensemble(
+            end_to_end.environment_ensemble(n_env, args.repeats, median_time, angle, RTOLS), n_env, fmt_t)
     print(f"\ntotal benchmark time {time.time() - t_start:.0f} s")
 
 

@@ -20,7 +20,6 @@ from .orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from .potentials import GravityGradient
 from .torques import EnvironmentTorques, Facet
 from .control import BDotControl, PDControl, ReactionWheel
-from .sweep import Sweep, load_sweep, run_sweep
 from .version import __version__
 
 __all__ = [
@@ -33,3 +32,20 @@ __all__ = [
     "to_dataset", "open_dataset", "write_aem", "read_aem",
     "Sweep", "SweepError", "load_sweep", "run_sweep",
 ]
+
+#: names loaded on first use (``orbatt.Sweep`` ...): a run does not need the sweep machinery
+_LAZY = {"Sweep": "sweep", "load_sweep": "sweep", "run_sweep": "sweep"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -48,8 +48,19 @@ def space_momentum(q, Q):
 
 def kinetic_energy(q, Q, inertia):
     """``T = 1/8 (I^-1 (x) q~Q).(q~Q) = 1/2 g.I^-1 g`` (eq. 6)."""
+    return _kinetic_energy(body_momentum(q, Q), _inertia(inertia))
+
+
+def _kinetic_energy(g, inertia):
+    return 0.5 * np.sum(g * g / inertia, axis=-1)
+
+
+def body_quantities(q, Q, inertia):
+    """``(g, omega, T)``: :func:`body_momentum`, :func:`body_rate` and
+    :func:`kinetic_energy` (the same values) from one evaluation of ``g``."""
+    inertia = _inertia(inertia)
     g = body_momentum(q, Q)
-    return 0.5 * np.sum(g * g / _inertia(inertia), axis=-1)
+    return g, g / inertia, _kinetic_energy(g, inertia)
 
 
 def hamilton_rhs(q, Q, inertia, dUdq=None):

@@ -98,15 +98,16 @@ def _cmd_run(args):
     stem = _plot_stem(args, sc)
     aem = _aem_path(args, sc, out)
     t0 = time.perf_counter()
-    try:
-        ds = sc.run(method=args.method, progress=not args.quiet)
+    try:  # the result's content: written and summarized without building the xarray Dataset
+        content = sc.run_content(method=args.method, progress=not args.quiet)
     except IntegrationError as exc:  # keep what was computed, marked incomplete, as Ctrl-C does
         _write_partial(exc, out)
         raise
     wall = time.perf_counter() - t0
-    write_netcdf(ds, out)
+    write_netcdf(content, out)
     if not args.quiet:
-        print(summary(ds, title=f"{sc.name} -> {out}", wall=wall))
+        print(summary(content, title=f"{sc.name} -> {out}", wall=wall))
+    ds = content.to_dataset() if aem is not None or args.plot else content
     if aem is not None:
         write_aem(ds, aem)
         if not args.quiet:
@@ -339,20 +340,24 @@ def _existing(path):
 
 
 def summary(ds, title="", wall=None) -> str:
-    """A short text table: span, method, stats, invariant drift, energy error."""
+    """A short text table: span, method, stats, invariant drift, energy error (of a Dataset or
+    its :class:`~orbatt.dataset.content.Content`)."""
+    import json
+
     import numpy as np
 
-    acc = ds.orbatt
+    settings = json.loads(ds.attrs.get("method_settings", "{}"))  # as ds.orbatt.settings, .stats
+    stats = json.loads(ds.attrs.get("integration_stats", "{}"))
     t = ds["time"].values
     lines = [title] if title else []
     tu = ds["time"].attrs.get("units", "")
     tu = "(dimensionless)" if tu == "1" else tu
     lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {tu} ({t.size} outputs)"
                  + (f", epoch {ds.attrs['epoch']}" if "epoch" in ds.attrs else ""))
-    lines.append(f"  method      {ds.attrs.get('method', '?')}  {acc.settings}")
-    if acc.stats:
+    lines.append(f"  method      {ds.attrs.get('method', '?')}  {settings}")
+    if stats:
         lines.append("  stats       " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                                                for k, v in acc.stats.items()))
+                                                for k, v in stats.items()))
     E = ds["energy"].values
     dE = np.max(np.abs(E - E[..., :1]))
     rel = dE / max(np.max(np.abs(E)), np.finfo(float).tiny)

@@ -64,23 +64,26 @@ def mul(a, b):
     """Quaternion product ``a b`` (Hamilton convention), broadcasting over leading axes."""
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    a0, a1, a2, a3 = np.moveaxis(a, -1, 0)
-    b0, b1, b2, b3 = np.moveaxis(b, -1, 0)
-    return np.stack(
-        [
-            a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
-            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
-            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0,
-        ],
-        axis=-1,
-    )
+    if a.ndim == 0 or b.ndim == 0 or a.shape[-1] != 4 or b.shape[-1] != 4:
+        raise ValueError(f"mul: expected quaternions of shape (..., 4), got {a.shape} and {b.shape}")
+    a0, a1, a2, a3 = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    b0, b1, b2, b3 = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+    # written into one array (no stack of temporaries): the same operations in the same order
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3
+    out[..., 1] = a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2
+    out[..., 2] = a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1
+    out[..., 3] = a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0
+    return out
+
+
+#: componentwise factor of the conjugate
+_CONJ = np.array([1.0, -1.0, -1.0, -1.0])
 
 
 def conj(q):
     """Conjugate ``q~ = (q0, -q1, -q2, -q3)``."""
-    q = np.asarray(q, dtype=np.float64)
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+    return np.asarray(q, dtype=np.float64) * _CONJ
 
 
 def dot(a, b):

@@ -102,3 +102,15 @@ def test_rebound_simulation_without_units_refused():
         ReboundOrbit.from_simulation(sim, t_end=1.0, particle=5, units=("km", "s"))
     with pytest.raises(InputError, match="^units: .* is not \\(length, time\\)"):
         ReboundOrbit.from_simulation(sim, t_end=1.0, units=("s", "km"))
+
+
+def test_orbit_quantities_in_one_call_are_the_separate_methods(paper):
+    """``quantities(t)`` (one Kepler solve / one interpolation) gives the values of
+    radius, orbital_quaternion, true_anomaly and state bit for bit."""
+    t = np.linspace(0.0, 7000.0, 9)
+    for orbit in (paper, ReboundOrbit(paper, 7000 * u.s)):
+        r, p, f, pos, vel = orbit.quantities(t)
+        pos1, vel1 = orbit.state(t)
+        for a, b in ((r, orbit.radius(t)), (p, orbit.orbital_quaternion(t)), (f, orbit.true_anomaly(t)),
+                     (pos, pos1), (vel, vel1)):
+            assert a.shape == b.shape and a.tobytes() == b.tobytes()

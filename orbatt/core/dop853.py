@@ -223,8 +223,9 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin
 # One trajectory
 
 
-def _initial_step_of(f):
-    """Hairer's ``hinit`` on the right-hand side ``f``."""
+def _initial_step_of(extended):
+    """Hairer's ``hinit`` on the right-hand side of the rigid body or (``extended``) of
+    :func:`orbatt.core.gyrostat.rhs_extended`."""
 
     def initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol, atol, hmax):
         """Hairer's ``hinit`` (order 8): a first step from the sizes of ``y``, ``f`` and an
@@ -236,18 +237,28 @@ def _initial_step_of(f):
             return h
         for i in range(y.shape[0]):
             ytmp[i] = y[i] + h * f0[i]
-        f(t + h, ytmp, inertia, terms, params, table, work, f1)
+        if extended:  # a constant: numba prunes the other branch (its callee is not compiled)
+            rhs_extended(t + h, ytmp, inertia, terms, params, table, work, f1)
+        else:
+            rhs(t + h, ytmp, inertia, terms, params, table, work, f1)
         return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
 
     return jit(initial_step)
 
 
-def _advance_of(width, f, f_inline):
-    """The one-trajectory step loop on the right-hand side ``f`` (``f_inline`` at the stages)
-    for states of ``width`` components (0: any width, ``len(y)``). The rigid body's loop keeps the constant 8, which LLVM unrolls, so it runs as
-    fast as before wider states existed (measured on the Keplerian case: 1.29 ms both)."""
+_initial_step = _initial_step_of(False)
+_initial_step_wide = _initial_step_of(True)
 
-    initial_step = _initial_step_of(f)
+
+def _advance_of(width, extended):
+    """The one-trajectory step loop for states of ``width`` components (0: any width,
+    ``len(y)``), on the rigid body's right-hand side (inlined at the stages) or (``extended``)
+    on :func:`orbatt.core.gyrostat.rhs_extended`. ``width`` and ``extended`` are constants of
+    the closure: numba prunes the branch not taken, so the rigid body's loop does not compile
+    the extended right-hand side, and they keep the on-disk cache key the same from one process
+    to the next (a closure over a dispatcher object would not: it pickles differently in every
+    process). The rigid body's loop keeps the constant 8, which LLVM unrolls, so it runs as
+    fast as before wider states existed (measured on the Keplerian case: 1.29 ms both)."""
 
     def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, params, table,
                 work, rtol, atol, max_step, max_steps, budget):
@@ -298,14 +309,21 @@ def _advance_of(width, f, f_inline):
         if i_out >= nout:
             return DONE
         if (flags & FLAG_F0_VALID) == 0:
-            f(t, y, inertia, terms, params, table, work, f0)
+            if extended:
+                rhs_extended(t, y, inertia, terms, params, table, work, f0)
+            else:
+                rhs(t, y, inertia, terms, params, table, work, f0)
             cnt[CNT_NFEV] += 1
             flags |= FLAG_F0_VALID
         for i in range(ncomp):
             K[0, i] = f0[i]
         if h <= 0.0:
-            h = initial_step(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
-                              min(max_step, t_out[nout - 1] - t))
+            if extended:
+                h = _initial_step_wide(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
+                                      min(max_step, t_out[nout - 1] - t))
+            else:
+                h = _initial_step(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
+                                  min(max_step, t_out[nout - 1] - t))
             cnt[CNT_NFEV] += 1
             if not (h > 0.0 and h < np.inf):
                 h = 1e-6 * max(1.0, abs(t_out[nout - 1] - t))
@@ -335,7 +353,10 @@ def _advance_of(width, f, f_inline):
                         ytmp[i] += a * K[j, i]
                 for i in range(ncomp):
                     ytmp[i] = y[i] + hh * ytmp[i]
-                f_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
+                if extended:
+                    rhs_extended(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
+                else:
+                    rhs_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
             cnt[CNT_NFEV] += N_STAGES - 1
             # --- 8th-order solution and error estimate
             e5 = 0.0
@@ -365,7 +386,10 @@ def _advance_of(width, f, f_inline):
             if err <= 1.0:
                 # accepted: FSAL derivative at the new point
                 t_new = t_next if landing else t + hh
-                f(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
+                if extended:
+                    rhs_extended(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
+                else:
+                    rhs(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
                 cnt[CNT_NFEV] += 1
                 ok = True
                 for i in range(ncomp):
@@ -417,15 +441,16 @@ def _advance_of(width, f, f_inline):
 
 
 #: the step loop of the rigid body, ``y = (q, Q)``
-advance = _advance_of(NDIM, rhs, rhs_inline)
+advance = _advance_of(NDIM, False)
 #: the step loop of extended models (reaction wheels, control laws: :mod:`orbatt.core.gyrostat`),
 #: states of any width (the gyrostat's ``(q, Q, h)``: one axial momentum per wheel); compiled on
 #: first use only, so that the rigid body's loop does not carry the extended right-hand side
-advance_wide = _advance_of(0, rhs_extended, rhs_extended)
+advance_wide = _advance_of(0, True)
 
 
-def _batch_of(advance_one):
-    """The ensemble driver over members of the one-trajectory loop ``advance_one``."""
+def _batch_of(extended):
+    """The ensemble driver over members of :func:`advance` or (``extended``) :func:`advance_wide`
+    (a constant of the closure, as in :func:`_advance_of`)."""
 
     def advance_batch(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK,
                       rtol, atol, max_step, max_steps, budget):
@@ -444,11 +469,15 @@ def _batch_of(advance_one):
             if CNT[e, CNT_IOUT] >= t_out.shape[0]:
                 status[e] = DONE
                 continue
-            status[e] = advance_one(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
+            if extended:
+                status[e] = advance_wide(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
+                                         terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
+            else:
+                status[e] = advance(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
                                     terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
 
     return jit_parallel(advance_batch)
 
 
-advance_batch = _batch_of(advance)
-advance_batch_wide = _batch_of(advance_wide)
+advance_batch = _batch_of(False)
+advance_batch_wide = _batch_of(True)

@@ -56,21 +56,23 @@ coordinate of a problem with an epoch has the CF encoding ``units = "seconds sin
 """
 from __future__ import annotations
 
+import sys
+
 from ..epoch import iso_epoch
 from ..orbital import lvlh_angles
 from ..quaternion import to_euler321
 from ..units import CF_UNITS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, parse_unit, unit_string
-from .accessor import OrbattAccessor
 from .aem import read_aem, write_aem
 from .build import (AXIS_INDEX, AXIS_LABELS, CONVENTIONS, EULER_313_LABELS, EULER_321_LABELS, FRAMES,
                     LABEL_COORDS, QUAT_INDEX, QUAT_LABELS, QUATERNION_ORDER, REFERENCE, cf_variable,
-                    global_attrs, orbatt_version, to_dataset, to_json, utc_now)
+                    dataset_content, global_attrs, orbatt_version, to_dataset, to_json, utc_now)
+from .content import Content
 from .netcdf import (DEFAULT_CHUNK_TIME, TEMP_PREFIX, NetCDFWriter, check_engine, decode, encode, encoding,
                      open_dataset, write_netcdf)
 from .paths import check_output_path, file_name, is_orbatt_result
 
 __all__ = [
-    "to_dataset", "global_attrs", "open_dataset", "write_netcdf", "NetCDFWriter", "OrbattAccessor",
+    "to_dataset", "dataset_content", "Content", "global_attrs", "open_dataset", "write_netcdf", "NetCDFWriter", "OrbattAccessor",
     "read_aem", "write_aem", "check_output_path", "file_name", "is_orbatt_result", "TEMP_PREFIX",
     "cf_variable", "check_engine", "encode", "encoding", "decode", "iso_epoch", "to_json", "utc_now",
     "orbatt_version", "to_euler321", "lvlh_angles", "unit_string", "parse_unit",
@@ -78,3 +80,52 @@ __all__ = [
     "EULER_321_LABELS", "LABEL_COORDS", "CONVENTIONS", "FRAMES", "REFERENCE", "CF_UNITS", "DIMENSIONAL_UNITS",
     "DIMENSIONLESS_UNITS", "DEFAULT_CHUNK_TIME",
 ]
+
+
+def __getattr__(name):
+    if name == "OrbattAccessor":
+        from .accessor import OrbattAccessor
+
+        return OrbattAccessor
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+class _AccessorWithXarray:
+    """Registers the ``ds.orbatt`` accessor (:mod:`orbatt.dataset.accessor`) right after xarray
+    is imported, so that importing orbatt does not import xarray and pandas (~0.3 s; a run
+    written by ``orbatt run`` needs neither) and ``ds.orbatt`` is there on every Dataset all
+    the same, whoever imports xarray and when. A finder placed first in ``sys.meta_path``
+    until xarray's import: it lets the usual finders find xarray and runs the accessor's
+    module after xarray's own."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name != "xarray":
+            return None
+        _remove_finder()
+        import importlib.util
+
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
+            return spec
+        run = spec.loader.exec_module
+
+        def exec_module(module):
+            run(module)
+            _register_accessor()
+
+        spec.loader.exec_module = exec_module
+        return spec
+
+
+def _register_accessor():
+    from . import accessor  # noqa: F401  (registers ds.orbatt)
+
+
+def _remove_finder():
+    sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, _AccessorWithXarray)]
+
+
+if "xarray" in sys.modules:
+    _register_accessor()
+elif not any(isinstance(f, _AccessorWithXarray) for f in sys.meta_path):
+    sys.meta_path.insert(0, _AccessorWithXarray())

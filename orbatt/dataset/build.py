@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import json
 from datetime import datetime, timezone
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 from astropy import units as u
 
 from .. import canonical as cn
@@ -23,8 +23,13 @@ from .control import control_variables, wheel_coordinates
 from ..epoch import iso_epoch
 from ..errors import InputError
 from ..orbital import lvlh_angles
+from ..orbits.base import OrbitProvider
 from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from ..version import __version__
+from .content import Content, Var
+
+if TYPE_CHECKING:  # annotations only: the Dataset is made by Content.to_dataset
+    import xarray
 
 #: why ``q``/``Q`` and ``g``/``G`` differ only in case (CF §2.3 advises against it): the names
 #: are the paper's notation, which every equation of the documentation uses
@@ -32,7 +37,7 @@ CASE_NOTE = ("q/Q and g/G differ only in case: the notation of Arribas, Elipe & 
              "kept so that names match the paper's equations (CF 2.3 advises distinct names)")
 
 __all__ = [
-    "CASE_NOTE", "to_dataset", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
+    "CASE_NOTE", "to_dataset", "dataset_content", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
     "QUATERNION_ORDER", "QUAT_INDEX", "QUAT_LABELS", "AXIS_INDEX", "AXIS_LABELS", "EULER_313_LABELS",
     "EULER_321_LABELS", "LABEL_COORDS", "CONVENTIONS", "REFERENCE", "FRAMES",
 ]
@@ -86,13 +91,27 @@ def orbatt_version() -> str:
 def cf_variable(dims, data, units, long_name, **extra):
     """An :class:`xarray.Variable` with the CF ``units`` and ``long_name`` attributes (and any
     ``extra`` ones)."""
+    from .assembly import variable
+
+    return variable(dims, data, _cf_attrs(units, long_name, extra))
+
+
+def _cf_attrs(units, long_name, extra):
     attrs = {"units": units, "long_name": long_name}
     attrs.update(extra)
-    return xr.Variable(dims, data, attrs)
+    return attrs
+
+
+def _var(dims, data, units, long_name, **extra):
+    """:func:`cf_variable`'s variable as a plain :class:`~orbatt.dataset.content.Var`."""
+    return Var(dims, data, _cf_attrs(units, long_name, extra))
 
 
 def _quat_attrs(frames, maps):
     return {"quaternion_order": QUATERNION_ORDER, "frames": frames, "convention": maps}
+
+
+_KM_PER_S = u.km / u.s
 
 
 def _plain(x, unit):
@@ -188,8 +207,18 @@ def global_attrs(*, method, settings, stats, potential, dimensionless, complete=
     return attrs
 
 
-def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.Dataset:
+def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> "xarray.Dataset":
     """The Dataset of a propagation (layout in :mod:`orbatt.dataset`).
+
+    Parameters and values as :func:`dataset_content`, whose :class:`xarray.Dataset` this is.
+    """
+    return dataset_content(trajectory, scenario_text=scenario_text, epoch=epoch, title=title).to_dataset()
+
+
+def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -> Content:
+    """The variables of the Dataset of a propagation, as plain arrays (layout in
+    :mod:`orbatt.dataset`; :meth:`~orbatt.dataset.content.Content.to_dataset` makes the
+    Dataset, :func:`orbatt.dataset.write_netcdf` writes either).
 
     Parameters
     ----------
@@ -206,7 +235,7 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
 
     Returns
     -------
-    xarray.Dataset
+    Content
         Every derived quantity is computed with :mod:`orbatt.canonical`,
         :mod:`orbatt.quaternion` and ``potential.evaluate``; nothing is integrated here.
     """
@@ -235,10 +264,8 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     epoch_s = None if dimless else iso_epoch(epoch)
 
     # --- state and derived quantities (orbatt.canonical / quaternion / potential) ---
-    g = cn.body_momentum(q, Q)
-    omega = cn.body_rate(q, Q, inert_b)
+    g, omega, T = cn.body_quantities(q, Q, inert_b)
     G = cn.space_momentum(q, Q)
-    T = cn.kinetic_energy(q, Q, inert_b)
     norm_err, qQ = cn.constraint_residuals(q, Q)
     if ens:
         Upot = np.stack([_potential_energy(tr.potential, _member_body(body, inertia[e]), t, q[e])
@@ -256,64 +283,63 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
                                                       "time since the start"),
                   "standard_name": "time", "axis": "T"}
     coords = {
-        "time": xr.Variable(("time",), t, time_attrs),
-        "quat": cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
+        "time": Var(("time",), t, time_attrs),
+        "quat": _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
-        "quat_label": xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
-        "axis": cf_variable(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
-        "axis_label": xr.Variable(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
-        "euler_313_angle": cf_variable(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
-        "euler_313_label": xr.Variable(("euler_313_angle",), np.array(EULER_313_LABELS),
+        "quat_label": Var(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
+        "axis": _var(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
+        "axis_label": Var(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
+        "euler_313_angle": _var(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
+        "euler_313_label": Var(("euler_313_angle",), np.array(EULER_313_LABELS),
                                        {"long_name": "3-1-3 Euler angle name"}),
     }
     if ens:
-        coords["case"] = cf_variable(("case",), np.arange(q.shape[0]), "1", "ensemble member")
+        coords["case"] = _var(("case",), np.arange(q.shape[0]), "1", "ensemble member")
 
     qv = tdims + ("quat",)
     vv = tdims + ("axis",)
     data = {
-        "q": cf_variable(qv, q, "1", "attitude quaternion of the body",
+        "q": _var(qv, q, "1", "attitude quaternion of the body",
                   **_quat_attrs("B relative to S", "x_S = q x_B q~ (maps body to space components)")),
-        "Q": cf_variable(qv, Q, U["momentum"], "conjugate momentum of q (paper eq. 5: Q = 2 q g)",
+        "Q": _var(qv, Q, U["momentum"], "conjugate momentum of q (paper eq. 5: Q = 2 q g)",
                   quaternion_order=QUATERNION_ORDER, conjugate_to="q (B relative to S)",
                   convention="g = 1/2 Im(q~ Q) (body), G = 1/2 Im(Q q~) (space)", comment=CASE_NOTE),
-        "omega": cf_variable(vv, omega, U["rate"], "angular velocity of the body (body components)", frame="B"),
-        "g": cf_variable(vv, g, U["momentum"], "angular momentum (body components)", frame="B"),
-        "G": cf_variable(vv, G, U["momentum"], "angular momentum (space components)", frame="S", comment=CASE_NOTE),
-        "energy": cf_variable(tdims, T + Upot, U["energy"], "total energy H = T + U"),
-        "kinetic_energy": cf_variable(tdims, T, U["energy"], "kinetic energy T (paper eq. 6)"),
-        "potential_energy": cf_variable(tdims, Upot, U["energy"], "potential energy U"),
-        "q_norm_error": cf_variable(tdims, norm_err, "1", "constraint residual |q| - 1"),
-        "qQ": cf_variable(tdims, qQ, U["momentum"], "constraint residual q.Q (R4 dot product)"),
-        "euler_313": cf_variable(tdims + ("euler_313_angle",), e313, "rad",
+        "omega": _var(vv, omega, U["rate"], "angular velocity of the body (body components)", frame="B"),
+        "g": _var(vv, g, U["momentum"], "angular momentum (body components)", frame="B"),
+        "G": _var(vv, G, U["momentum"], "angular momentum (space components)", frame="S", comment=CASE_NOTE),
+        "energy": _var(tdims, T + Upot, U["energy"], "total energy H = T + U"),
+        "kinetic_energy": _var(tdims, T, U["energy"], "kinetic energy T (paper eq. 6)"),
+        "potential_energy": _var(tdims, Upot, U["energy"], "potential energy U"),
+        "q_norm_error": _var(tdims, norm_err, "1", "constraint residual |q| - 1"),
+        "qQ": _var(tdims, qQ, U["momentum"], "constraint residual q.Q (R4 dot product)"),
+        "euler_313": _var(tdims + ("euler_313_angle",), e313, "rad",
                           "3-1-3 Euler angles (phi, theta, psi) of q (paper eq. 12): "
                           "q = q_z(phi) q_x(theta) q_z(psi)", frames="B relative to S"),
-        "inertia": cf_variable(lead + ("axis",), inertia, U["inertia"], "principal moments of inertia (I1, I2, I3)",
+        "inertia": _var(lead + ("axis",), inertia, U["inertia"], "principal moments of inertia (I1, I2, I3)",
                         frame="B"),
     }
 
     if orbit is not None:
-        r = _plain(orbit.radius(t), u.km)
-        p = _plain(orbit.orbital_quaternion(t), u.one)
-        nu = _plain(orbit.true_anomaly(t), u.rad)
-        pos, vel = orbit.state(t)
-        pos = _plain(pos, u.km)
-        vel = _plain(vel, u.km / u.s)
+        # a provider without quantities() (any object with the contract's methods): one by one
+        r, p, nu, pos, vel = (orbit.quantities(t) if hasattr(orbit, "quantities")
+                              else OrbitProvider.quantities(orbit, t))
+        r, p, nu = _plain(r, u.km), _plain(p, u.one), _plain(nu, u.rad)
+        pos, vel = _plain(pos, u.km), _plain(vel, _KM_PER_S)
         q_orb = qt.mul(qt.conj(p), q)
         roll, pitch, yaw = lvlh_angles(q_orb)
-        coords["euler_321_angle"] = cf_variable(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
-        coords["euler_321_label"] = xr.Variable(("euler_321_angle",), np.array(EULER_321_LABELS),
+        coords["euler_321_angle"] = _var(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
+        coords["euler_321_label"] = Var(("euler_321_angle",), np.array(EULER_321_LABELS),
                                                 {"long_name": "3-2-1 Euler angle name"})
         data.update({
-            "r": cf_variable(("time",), r, U["length"], "orbit radius"),
-            "p": cf_variable(("time", "quat"), p, "1", "orbital quaternion",
+            "r": _var(("time",), r, U["length"], "orbit radius"),
+            "p": _var(("time", "quat"), p, "1", "orbital quaternion",
                       **_quat_attrs("O relative to S", "x_S = p x_O p~ (maps orbital to space components)")),
-            "true_anomaly": cf_variable(("time",), nu, "rad", "true anomaly"),
-            "position": cf_variable(("time", "axis"), pos, U["length"], "position of the body's centre of mass", frame="S"),
-            "velocity": cf_variable(("time", "axis"), vel, U["speed"], "velocity of the body's centre of mass", frame="S"),
-            "q_orbital": cf_variable(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
+            "true_anomaly": _var(("time",), nu, "rad", "true anomaly"),
+            "position": _var(("time", "axis"), pos, U["length"], "position of the body's centre of mass", frame="S"),
+            "velocity": _var(("time", "axis"), vel, U["speed"], "velocity of the body's centre of mass", frame="S"),
+            "q_orbital": _var(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
                               **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
-            "euler_321": cf_variable(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
+            "euler_321": _var(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
                               "roll (about along-track o2), pitch (about orbit normal o3), yaw (about radial o1) "
                               "of q_orbital: q_orbital = m q_yaw,o1 q_pitch,o3 q_roll,o2 m~ (3-2-1 sequence in "
                               "the axes (o2, o3, o1))", frames="B relative to O",
@@ -323,15 +349,14 @@ def to_dataset(trajectory, *, scenario_text=None, epoch=None, title=None) -> xr.
     data.update(_torque_variables(tr.potential, body, inertia, t, q, tdims, ens))
     extra = control_variables(tr, body, inertia, t, tdims, U)
     if "kinetic_energy" in extra:  # a gyrostat: its rate and energy replace the rigid body's
-        extra["energy"] = cf_variable(tdims, extra["kinetic_energy"].values + Upot, U["energy"],
-                                      "total energy H = T + U")
+        extra["energy"] = _var(tdims, extra["kinetic_energy"].values + Upot, U["energy"], "total energy H = T + U")
     data.update(extra)
     coords.update(wheel_coordinates(body, U))
 
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title)
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return Content(data, coords, attrs)
 
 
 #: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m
@@ -359,14 +384,14 @@ def _torque_variables(potential, body, inertia, t, q, tdims, ens):
     total = tau[..., 0, :].copy()
     for k in range(1, len(names)):
         total += tau[..., k, :]
-    out = {"torque": cf_variable(vv, total, "N m", "total external torque on the body (body components)",
+    out = {"torque": _var(vv, total, "N m", "total external torque on the body (body components)",
                                  frame="B", terms=" + ".join(f"torque_{n}" for n in names))}
     for k, n in enumerate(names):
-        out[f"torque_{n}"] = cf_variable(vv, np.ascontiguousarray(tau[..., k, :]), "N m",
+        out[f"torque_{n}"] = _var(vv, np.ascontiguousarray(tau[..., k, :]), "N m",
                                          f"{n.replace('_', ' ')} torque on the body (body components)", frame="B")
     for key, values in potential.fields(t).items():
         dims, unit, long_name, extra = _FIELD_VARIABLES[key]
-        out[key] = cf_variable(("time",) + dims, values, unit, long_name, **extra)
+        out[key] = _var(("time",) + dims, values, unit, long_name, **extra)
     return out
 
 

@@ -8,12 +8,12 @@ integration used; nothing is integrated here.
 from __future__ import annotations
 
 import numpy as np
-import xarray as xr
 
 from .. import canonical as cn
 from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
+from .content import Var
 
 __all__ = ["control_variables", "wheel_coordinates", "TORQUE_TO_N_M"]
 
@@ -24,7 +24,7 @@ TORQUE_TO_N_M = 1e6
 def _var(dims, data, units, long_name, **extra):
     attrs = {"units": units, "long_name": long_name}
     attrs.update(extra)
-    return xr.Variable(dims, data, attrs)
+    return Var(tuple(dims), np.asarray(data), attrs)
 
 
 def control_variables(trajectory, body, inertia, t, tdims, units):
@@ -48,7 +48,7 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
 
     Returns
     -------
-    dict of xarray.Variable
+    dict of Var
         ``omega`` (rad/s) and ``kinetic_energy`` (body + rotors) of the gyrostat, and
         ``wheel_momentum`` (kg km^2/s, axial, absolute), ``wheel_speed`` (rad/s, relative to
         the body), ``wheel_torque`` (N m, motor) with a ``wheel`` dimension; with a control law

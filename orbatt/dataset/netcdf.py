@@ -28,13 +28,18 @@ import signal
 import sys
 import threading
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from ..errors import InputError
 from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, orbatt_version, utc_now
+from .content import Content, Var
+from .netcdf_direct import writable, write_content
+
+if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is read or made
+    import xarray as xr
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
            "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS"]
@@ -80,21 +85,30 @@ def check_engine(engine):
 def encode(ds: xr.Dataset) -> xr.Dataset:
     """The file form: CF time reference (the epoch, or :data:`NOMINAL_REFERENCE` for a
     dimensional run without one), no stale encodings."""
-    out = ds.drop_encoding()
-    if "time" not in ds.coords or ds["time"].attrs.get("units") != "s":
-        return out  # a dimensionless time ("1") has no CF time reference
-    epoch = ds.attrs.get("epoch")
-    attrs = dict(ds["time"].attrs)
+    out = ds.drop_encoding()  # new variables (attribute dicts copied, data shared)
+    if "time" in ds.coords:
+        _cf_time(out["time"].attrs, ds.attrs)  # out's own copy: ds keeps its attributes
+    return out
+
+
+def _cf_time(attrs, global_attrs):
+    """Turn the attributes ``attrs`` of a time coordinate in seconds (``units = "s"``) into
+    CF's ``seconds since <epoch>`` (in place); a dimensionless time (``"1"``) has no CF time
+    reference and stays."""
+    if attrs.get("units") != "s":
+        return
+    epoch = global_attrs.get("epoch")
     if epoch:
         attrs.update(units=f"seconds since {epoch}", calendar="standard", units_metadata=LEAP_SECONDS)
     else:
         attrs.update(units=f"seconds since {NOMINAL_REFERENCE}", calendar="proleptic_gregorian",
                      units_metadata="leap_seconds: none", comment=NOMINAL_COMMENT)
-    return out.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs))
 
 
 def decode(ds: xr.Dataset) -> xr.Dataset:
     """Inverse of :func:`encode` on a dataset opened with ``decode_times=False``."""
+    import xarray as xr
+
     if "time" in ds.coords:
         units = str(ds["time"].attrs.get("units", ""))
         if " since " in units:
@@ -119,10 +133,10 @@ def decode(ds: xr.Dataset) -> xr.Dataset:
 
 
 def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
-    """Per-variable NetCDF encoding: no fill values, labels as char arrays, chunks of
-    ``chunk_time`` samples along ``time`` (one ``case`` per chunk) with a Fletcher-32
-    checksum each (reading a damaged chunk fails), zlib + shuffle on floats when
-    ``complevel > 0`` (lossless)."""
+    """Per-variable NetCDF encoding (of a Dataset or a :class:`Content`): no fill values,
+    labels as char arrays, chunks of ``chunk_time`` samples along ``time`` (one ``case`` per
+    chunk) with a Fletcher-32 checksum each (reading a damaged chunk fails), zlib + shuffle on
+    floats when ``complevel > 0`` (lossless)."""
     enc = {}
     for name, var in ds.variables.items():
         e = {}
@@ -146,8 +160,9 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        An orbatt Dataset (:func:`to_dataset`) or a slice of one along ``time``.
+    ds : xarray.Dataset or Content
+        An orbatt Dataset (:func:`to_dataset`) or a slice of one along ``time``, or the
+        :class:`~orbatt.dataset.content.Content` of one (:func:`dataset_content`).
     path : str or os.PathLike
     engine : {"netcdf4", "h5netcdf"}, optional
         Library used; default netCDF4 if installed, else h5netcdf (needs h5py). Both write the
@@ -182,6 +197,10 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
     ``path``; the temporary file it leaves is removed by the next write of ``path``. Use
     :func:`orbatt.dataset.paths.check_output_path` first to refuse paths that are not orbatt
     results.
+
+    With the netCDF4 engine, a new file of plain numpy variables is written by
+    :mod:`orbatt.dataset.netcdf_direct` (the file xarray writes, without importing dask);
+    anything else by xarray.
     """
     engine = check_engine(engine)
     path = os.fspath(path)
@@ -189,13 +208,48 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
         if append and os.path.exists(path):
             with replacing(path) as tmp:  # append to a copy, renamed over path
                 shutil.copyfile(path, tmp)
-                _append(ds, tmp, engine, name=path)
+                _append(_as_dataset(ds), tmp, engine, name=path)
         else:
-            enc_ds = encode(ds)
-            _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
-                             encoding=encoding(enc_ds, complevel, chunk_time))
+            form = _file_content(ds) if engine == "netcdf4" else None
+            enc = encoding(form, complevel, chunk_time) if form is not None else None
+            if form is not None and "time" in form.sizes and writable(form.variables, form.attrs, enc):
+                with replacing(path) as tmp:
+                    write_content(tmp, form.variables, set(form.coords), form.attrs, encoding=enc,
+                                  unlimited_dims=["time"])
+            else:
+                enc_ds = encode(_as_dataset(ds))
+                _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
+                                 encoding=encoding(enc_ds, complevel, chunk_time))
     if interrupted:
         raise KeyboardInterrupt
+
+
+def _as_dataset(ds):
+    """``ds`` as an :class:`xarray.Dataset` (a :class:`Content` is turned into one)."""
+    return ds.to_dataset() if isinstance(ds, Content) else ds
+
+
+def _file_content(ds):
+    """The file form (:func:`encode`) of ``ds`` as a :class:`Content` of numpy arrays, or None
+    where a variable holds anything else (dask arrays ...)."""
+    if isinstance(ds, Content):
+        data_vars, coords, attrs = ds.data_vars, ds.coords, ds.attrs
+    else:
+        plain = {}
+        for name, var in ds.variables.items():
+            values = var.data
+            if type(values) is not np.ndarray:
+                return None
+            plain[name] = Var(var.dims, values, var.attrs)
+        data_vars = {k: plain[k] for k in ds.data_vars}
+        coords = {k: plain[k] for k in ds.coords}
+        attrs = ds.attrs
+    if "time" in coords:
+        time = coords["time"]
+        time_attrs = dict(time.attrs)
+        _cf_time(time_attrs, attrs)
+        coords = dict(coords, time=Var(time.dims, time.values, time_attrs))
+    return Content(data_vars, coords, attrs)
 
 
 def _write_replacing(ds: xr.Dataset, path, **to_netcdf):
@@ -402,6 +456,8 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
         of the file is undone), label coordinates as strings, every value bit for bit as
         written.
     """
+    import xarray as xr
+
     engine = check_engine(engine)
     kwargs.setdefault("decode_times", False)
     kwargs.setdefault("decode_timedelta", False)

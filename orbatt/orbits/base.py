@@ -129,8 +129,20 @@ class OrbitProvider:
     def true_anomaly(self, t):
         """Osculating true anomaly (rad), unwrapped along a 1-D ``t``."""
         pos, vel = self.state(t)
-        f = osculating_true_anomaly(pos, vel, self.gm)
-        return np.unwrap(f) if f.ndim == 1 and f.size > 1 else f
+        return _unwrapped_true_anomaly(pos, vel, self.gm)
+
+    def quantities(self, t):
+        """``(r, p, true_anomaly, position, velocity)`` at ``t``: what a result Dataset records
+        (:meth:`radius`, :meth:`orbital_quaternion`, :meth:`true_anomaly`, :meth:`state`),
+        in one call. Where a provider keeps this class's three methods, all come from one
+        :meth:`state`; a provider may override it to evaluate its orbit once."""
+        pos, vel = self.state(t)
+        cls = type(self)
+        if (cls.radius is OrbitProvider.radius and cls.orbital_quaternion is OrbitProvider.orbital_quaternion
+                and cls.true_anomaly is OrbitProvider.true_anomaly):
+            return (np.linalg.norm(pos, axis=-1), frame_quaternion(pos, vel),
+                    _unwrapped_true_anomaly(pos, vel, self.gm), pos, vel)
+        return self.radius(t), self.orbital_quaternion(t), self.true_anomaly(t), pos, vel
 
     def orbital_rate(self, t):
         """Angular velocity of ``O`` relative to ``S``, ``O`` components (rad/s):
@@ -191,6 +203,12 @@ def sign_continuous(p):
     d = np.sum(p[1:] * p[:-1], axis=-1)
     flips = np.concatenate([[1.0], np.cumprod(np.where(d < 0.0, -1.0, 1.0))])
     return p * flips[:, None]
+
+
+def _unwrapped_true_anomaly(pos, vel, gm):
+    """:func:`osculating_true_anomaly`, unwrapped along a 1-D time axis."""
+    f = osculating_true_anomaly(pos, vel, gm)
+    return np.unwrap(f) if f.ndim == 1 and f.size > 1 else f
 
 
 def osculating_true_anomaly(pos, vel, gm):

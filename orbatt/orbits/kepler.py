@@ -265,7 +265,17 @@ class KeplerOrbit(OrbitProvider):
     def orbital_quaternion(self, t):
         """``p``: the 3-1-3 quaternion of ``(raan, i, u = argp + f)`` (maps ``O`` to ``S``);
         continuous in time (``u`` is not wrapped); shape ``t.shape + (4,)``."""
-        f = self.true_anomaly(t)
+        return self._frame(self.true_anomaly(t))
+
+    def quantities(self, t):
+        """``(r, p, true_anomaly, position, velocity)`` at ``t`` from one solution of
+        Kepler's equation (the values of the separate methods)."""
+        shape, _, f, r, pos, vel = self._many(t)
+        f = f.reshape(shape)
+        return r.reshape(shape), self._frame(f), f, pos.reshape(shape + (3,)), vel.reshape(shape + (3,))
+
+    def _frame(self, f):
+        """``p`` of the true anomalies ``f`` (:meth:`orbital_quaternion`)."""
         uu = self.argp + f
         ci = math.cos(0.5 * self.inc)
         si = math.sin(0.5 * self.inc)

@@ -45,18 +45,21 @@ MAGNITUDE = (1e-100, 1e100)
 def _split_quantity(ctx, where, text, unit):
     """``(number, astropy unit)`` of ``"NUMBER UNIT"``; the whole string must parse."""
     m = _QUANTITY.fullmatch(text)
-    example = f"'1 {unit.to_string()}'" if unit != U.DIMENSIONLESS else "'0.5'"
+
+    def example():
+        return f"'1 {unit.to_string()}'" if unit != U.DIMENSIONLESS else "'0.5'"
+
     if m is None or (m.group(2) and m.group(2)[0] in "0123456789+-."):
-        raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example}")
+        raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example()}")
     number, unit_text = float(m.group(1)), m.group(2)
     if not unit_text:
         return number, U.DIMENSIONLESS
     try:
         parsed = u.Unit(unit_text)
     except ValueError:
-        raise ctx.error(where, f"{unit_text!r} in {text!r} is not a unit; write e.g. {example}") from None
+        raise ctx.error(where, f"{unit_text!r} in {text!r} is not a unit; write e.g. {example()}") from None
     if parsed.scale != 1 and not parsed.is_equivalent(U.DIMENSIONLESS):
-        raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example}")
+        raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example()}")
     return number, parsed
 
 
@@ -117,32 +120,66 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise ctx.error(where, f"{value!r} is not a number or a quantity string")
-    angle = unit == U.ANGLE
     if isinstance(value, str):
-        number, qunit = _split_quantity(ctx, where, value, unit)
-        if angle and qunit.physical_type != "angle":
-            what = "no unit" if qunit == U.DIMENSIONLESS else f"the unit {qunit.to_string()!r} ({qunit.physical_type})"
-            raise ctx.error(where, f"{value!r} has {what}; an angle needs an angle unit, e.g. '{number:g} deg' "
-                                   f"or '{number:g} rad'")
-        if dimensionless and not angle and unit != U.DIMENSIONLESS and qunit != U.DIMENSIONLESS:
-            raise ctx.error(where, f"{value!r} has a unit but [body] inertia is plain numbers (normalized "
-                                   "units); give a plain number or give the inertia with units")
-        if not math.isfinite(number):
-            raise ctx.error(where, f"{value!r} is not finite; give a finite value")
-        try:
-            x = float((number * qunit).to_value(unit))
-        except u.UnitConversionError:
-            raise ctx.error(where, f"{value!r} has the wrong dimension; expected a {unit.physical_type} such "
-                                   f"as '1 {unit.to_string()}'") from None
+        key = (value, unit, dimensionless, u.get_current_unit_registry())
+        x = _PARSED.get(key)
+        if x is None:
+            x = _parse_quantity_string(ctx, where, value, unit, dimensionless)
+            if len(_PARSED) < 4096:
+                _PARSED[key] = x
         return _check_value(ctx, where, value, x, unit, bounds)
     x = float(value)
+    angle = _equal(unit, U.ANGLE)
     if angle and x != 0:
         raise ctx.error(where, f"{value!r} has no unit; an angle needs an angle unit: write '{value} deg' or "
                                f"'{value} rad'")
-    if not (angle or unit == U.DIMENSIONLESS or dimensionless):
+    if not (angle or dimensionless or _equal(unit, U.DIMENSIONLESS)):
         raise ctx.error(where, f"{value!r} has no unit; write it as a quantity string such as "
                                f"'{value} {unit.to_string()}'")
     return _check_value(ctx, where, value, x, unit, bounds)
+
+
+#: ``(unit, other) -> unit == other``: astropy's comparison of two units (~20 us: it converts
+#: one into the other) for the few pairs a scenario compares
+_EQUAL = {}
+
+
+def _equal(unit, other) -> bool:
+    """``unit == other``, remembered per pair."""
+    key = (unit, other)
+    same = _EQUAL.get(key)
+    if same is None:
+        same = bool(unit == other)
+        if len(_EQUAL) < 1024:
+            _EQUAL[key] = same
+    return same
+
+
+#: ``(text, unit, dimensionless, unit registry) -> value``: quantity strings parsed before
+#: (astropy's unit parser takes ~0.1 ms a string; a scenario has a dozen, a sweep reads them
+#: again per chunk). Only parses that succeeded are kept; the range check runs every time.
+_PARSED = {}
+
+
+def _parse_quantity_string(ctx, where, value, unit, dimensionless):
+    """The value of the quantity string ``value`` in ``unit`` (:func:`parse_quantity`'s rules
+    but the range check)."""
+    angle = _equal(unit, U.ANGLE)
+    number, qunit = _split_quantity(ctx, where, value, unit)
+    if angle and qunit.physical_type != "angle":
+        what = "no unit" if qunit == U.DIMENSIONLESS else f"the unit {qunit.to_string()!r} ({qunit.physical_type})"
+        raise ctx.error(where, f"{value!r} has {what}; an angle needs an angle unit, e.g. '{number:g} deg' "
+                               f"or '{number:g} rad'")
+    if dimensionless and not angle and unit != U.DIMENSIONLESS and qunit != U.DIMENSIONLESS:
+        raise ctx.error(where, f"{value!r} has a unit but [body] inertia is plain numbers (normalized "
+                               "units); give a plain number or give the inertia with units")
+    if not math.isfinite(number):
+        raise ctx.error(where, f"{value!r} is not finite; give a finite value")
+    try:
+        return float((number * qunit).to_value(unit))
+    except u.UnitConversionError:
+        raise ctx.error(where, f"{value!r} has the wrong dimension; expected a {unit.physical_type} such "
+                               f"as '1 {unit.to_string()}'") from None
 
 
 def parse_vector(ctx, where, value, n, unit, *, dimensionless, bounds=None):

@@ -11,7 +11,8 @@ from .build import (build_initial_state, build_kepler_orbit, build_output_times,
                     build_rebound_orbit, build_tle_orbit, check_work, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
-from ..dataset import to_dataset
+from ..dataset.build import dataset_content
+from ..dataset.content import Content
 from ..propagation import propagate
 
 __all__ = ["Scenario", "load_scenario", "shipped_scenarios", "read_scenario_text"]
@@ -95,7 +96,13 @@ class Scenario:
             incomplete (``integration_complete = 0``; None if nothing was), its
             ``trajectory`` the same as a :class:`~orbatt.trajectory.Trajectory`.
         """
+        return self.run_content(method, progress, **overrides).to_dataset()
 
+    def run_content(self, method=None, progress=False, **overrides) -> Content:
+        """:meth:`run`'s result as plain arrays: the :class:`~orbatt.dataset.content.Content`
+        whose :meth:`~orbatt.dataset.content.Content.to_dataset` is :meth:`run`'s Dataset
+        (what ``orbatt run`` writes, without importing xarray). Parameters and errors as
+        :meth:`run`."""
         kw = dict(self.settings)
         kw.update(overrides)
         m = method or self.method
@@ -105,13 +112,13 @@ class Scenario:
             raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
         except IntegrationError as exc:
             partial = getattr(exc, "trajectory", None)
-            exc.dataset = self._dataset(partial) if partial is not None and partial.t.size else None
+            exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
             raise
-        return self._dataset(traj)
+        return self._content(traj)
 
-    def _dataset(self, traj):
+    def _content(self, traj):
         epoch = self.orbit.epoch if self.orbit is not None else None
-        return to_dataset(traj, scenario_text=self.text, epoch=epoch, title=f"orbatt: {self.name}")
+        return dataset_content(traj, scenario_text=self.text, epoch=epoch, title=f"orbatt: {self.name}")
 
     def __repr__(self):
         return f"Scenario({self.name!r}, method={self.method!r}, outputs={self.times.size})"

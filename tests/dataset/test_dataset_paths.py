@@ -10,6 +10,7 @@ import pytest
 import xarray as xr
 
 from orbatt import dataset as D
+from orbatt.dataset import netcdf
 from orbatt.errors import InputError
 
 from dataset_support import assert_bitwise_identical
@@ -126,19 +127,35 @@ def test_zarr_store_of_orbatt_only_with_zarr(tmp_path):
 # ------------------------------------------------------------------------------------------
 # atomic writes
 # ------------------------------------------------------------------------------------------
-def test_failed_write_keeps_the_old_file_and_no_temporary(free_ds, tmp_path, monkeypatch):
+@pytest.mark.parametrize("writer", ["direct", "xarray"])
+def test_failed_write_keeps_the_old_file_and_no_temporary(free_ds, tmp_path, monkeypatch, writer):
     out = tmp_path / "r.nc"
     D.write_netcdf(free_ds, out)
     before = out.read_bytes()
-    real = xr.Dataset.to_netcdf
 
-    def half_then_fail(self, path, *a, **k):
+    def check(path):
         assert os.path.basename(path).startswith(D.TEMP_PREFIX + "r.nc.")
         assert os.path.dirname(os.path.abspath(path)) == str(tmp_path)
-        real(self, path, *a, **k)
-        raise OSError("disk full")
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", half_then_fail)
+    if writer == "direct":  # orbatt's own netCDF4 writer (a run's plain arrays)
+        real = netcdf.write_content
+
+        def half_then_fail(path, *a, **k):
+            check(path)
+            real(path, *a, **k)
+            raise OSError("disk full")
+
+        monkeypatch.setattr(netcdf, "write_content", half_then_fail)
+    else:  # xarray's, for what the direct writer does not cover
+        real = xr.Dataset.to_netcdf
+
+        def half_then_fail(self, path, *a, **k):
+            check(path)
+            real(self, path, *a, **k)
+            raise OSError("disk full")
+
+        monkeypatch.setattr(netcdf, "writable", lambda *a: False)
+        monkeypatch.setattr(xr.Dataset, "to_netcdf", half_then_fail)
     with pytest.raises(OSError, match="disk full"):
         D.write_netcdf(free_ds, out)
     assert out.read_bytes() == before
@@ -161,15 +178,15 @@ def test_ctrl_c_during_the_write_is_held_back(free_ds, tmp_path, monkeypatch):
     if threading.current_thread() is not threading.main_thread():
         pytest.skip("signals are handled in the main thread only")
     out = tmp_path / "r.nc"
-    real = xr.Dataset.to_netcdf
+    real = netcdf.write_content  # the writer of a run's arrays (orbatt.dataset.netcdf_direct)
     seen = []
 
-    def interrupted(self, path, *a, **k):
+    def interrupted(path, *a, **k):
         os.kill(os.getpid(), signal.SIGINT)
         seen.append(os.path.basename(path))
-        return real(self, path, *a, **k)
+        return real(path, *a, **k)
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", interrupted)
+    monkeypatch.setattr(netcdf, "write_content", interrupted)
     with pytest.raises(KeyboardInterrupt):
         D.write_netcdf(free_ds, out)
     assert seen and seen[0].startswith(D.TEMP_PREFIX)

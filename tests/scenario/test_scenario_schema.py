@@ -75,3 +75,22 @@ def test_dimensionless_scenario_refuses_units_on_omega():
     t = t.replace("Q = [0.3, -0.848528, 0.141421, -1.5]", 'omega = ["1 rad/s", 0, 0]')
     with pytest.raises(ScenarioError, match=r"omega\[0\].*has a unit but \[body\] inertia is plain"):
         parse(t)
+
+
+def test_quantity_strings_parsed_again_give_the_same_values_and_errors():
+    """Parsed quantity strings are remembered (issue 15): a second parse gives the same
+    values, a per-key range still applies, and a bad string is refused every time."""
+    from astropy import units as u
+
+    from orbatt.scenario.fields import FieldContext, parse_quantity
+
+    ctx = FieldContext("f.toml")
+    first = parse_quantity(ctx, "[orbit] a", "7000 km", u.km, dimensionless=False)
+    again = parse_quantity(ctx, "[orbit] a", "7000 km", u.km, dimensionless=False)
+    assert first == again == 7000.0
+    assert parse_quantity(ctx, "[orbit] i", "30 deg", u.rad, dimensionless=False) == (30 * u.deg).to_value(u.rad)
+    with pytest.raises(ScenarioError, match="outside the range"):
+        parse_quantity(ctx, "[orbit] a", "7000 km", u.km, dimensionless=False, bounds=(7100.0, None))
+    for _ in range(2):
+        with pytest.raises(ScenarioError, match=r"f\.toml: \[orbit\] a: '7000 s' has the wrong dimension"):
+            parse_quantity(ctx, "[orbit] a", "7000 s", u.km, dimensionless=False)
