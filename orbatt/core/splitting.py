@@ -51,6 +51,7 @@ operations of :func:`advance`, so results are identical to one-by-one runs.
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numba as nb
@@ -140,7 +141,15 @@ def _kinetic_block(kinetic, tau, toff):
 def sequence(gammas, kinetic="shifted"):
     """Flatten the composition ``S(g_s h) ... S(g_1 h)`` of kick-drift-kick Strang steps into
     ``(flow, weight, toff)`` arrays: flow codes, durations and kick time offsets in units of
-    ``h``. Adjacent kicks and adjacent rotations of the same kind are merged."""
+    ``h``. Adjacent kicks and adjacent rotations of the same kind are merged. (Fresh copies of
+    arrays flattened once per composition and ``kinetic``.)"""
+    flow, weight, toff = _flatten(tuple(float(g) for g in gammas), kinetic)
+    return flow.copy(), weight.copy(), toff.copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _flatten(gammas, kinetic):
+    """:func:`sequence` of the tuple ``gammas`` (cached)."""
     ops = []
     t = 0.0
     for g in gammas:
