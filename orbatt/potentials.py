@@ -17,6 +17,12 @@ from .errors import InputError
 from .orbits.base import OrbitProvider
 
 
+def _read_only(a):
+    """``a`` with its ``writeable`` flag cleared (a potential's parameters are fixed)."""
+    a.flags.writeable = False
+    return a
+
+
 class Potential:
     """Base class. Subclasses set ``kind``, ``params``, ``table`` and ``name``.
 
@@ -47,7 +53,21 @@ class Potential:
 
     def kernel_model(self):
         """The compiled model ``(terms, params, table)`` of this potential
-        (:mod:`orbatt.core.model`), built from its kernel specification."""
+        (:mod:`orbatt.core.model`): fresh writeable copies (the caller may change them) of
+        the model :meth:`build_model` made on the first call. A potential does not change
+        after construction (its ``params`` are read-only); assigning other ``params`` or
+        ``table`` arrays makes the next call build the model again."""
+        cache = self.__dict__.get("_kernel_cache")
+        if cache is None or cache[0] is not self.params or cache[1] is not self.table:
+            cache = (self.params, self.table, self.build_model())
+            self._kernel_cache = cache
+        terms, params, table = cache[2]
+        return terms.copy(), params.copy(), table.copy()
+
+    def build_model(self):
+        """Build the compiled model ``(terms, params, table)`` from the kernel specification
+        (:func:`orbatt.core.model.from_spec`); subclasses with more terms override it. Use
+        :meth:`kernel_model`, which builds it once."""
         return km.from_spec(self.kind, self.params, self.table)
 
     def describe(self) -> dict:
@@ -74,7 +94,7 @@ class TorqueFree(Potential):
 
     kind = kp.TORQUE_FREE
     name = "torque-free"
-    params = np.zeros(1)
+    params = _read_only(np.zeros(1))
 
 
 class HeavyTop(Potential):
@@ -111,7 +131,7 @@ class HeavyTop(Potential):
             raise InputError(f"center_of_mass: expected [x, y, z] in body axes, got {center_of_mass!r}")
         self.sign = sign
         s = 1.0 if sign == "physical" else -1.0
-        self.params = np.array([s * float(mg), *xc], dtype=np.float64)
+        self.params = _read_only(np.array([s * float(mg), *xc], dtype=np.float64))
 
     def check_body(self, body):
         if body.dimensionless != self.dimensionless:
@@ -161,7 +181,8 @@ class GravityGradient(Potential):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got "
                              f"{type(orbit).__name__}")
         self.orbit = orbit
-        self.kind, self.params, self.table = orbit.kernel()
+        self.kind, params, self.table = orbit.kernel()
+        self.params = _read_only(np.array(params, dtype=np.float64))
 
     @property
     def time_span(self):

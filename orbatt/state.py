@@ -140,7 +140,9 @@ class State:
     @property
     def y(self):
         """The kernels' state vector(s) ``(q0..q3, Q0..Q3)``, shape ``(..., 8)``."""
-        q, Q = np.broadcast_arrays(self.q, self.Q)
+        q, Q = self.q, self.Q
+        if q.shape != Q.shape:
+            q, Q = np.broadcast_arrays(q, Q)
         return np.concatenate([q, Q], axis=-1)
 
     def __repr__(self):

@@ -185,9 +185,9 @@ class EnvironmentTorques(Potential):
         if isinstance(control, PDControl) and control.target == "sun" and epoch is None:
             raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
         self.control = control
+        self._control_rows = {}
         self.span = (t0, t1)
         self.kind, self.params, self.table = orbit.kernel()
-        self._model = None
         self._fields = {}
 
     # --- the kernel model
@@ -196,11 +196,10 @@ class EnvironmentTorques(Potential):
         # a margin of one step on each side, so that the spline covers the whole run
         return sample_along_orbit(self.orbit, (t0 - step) * u.s, (t1 + step) * u.s, step * u.s)
 
-    def kernel_model(self):
+    def build_model(self):
         """The compiled model ``(terms, params, table)`` (:mod:`orbatt.core.model`): the orbit,
-        then gravity gradient, drag, SRP, magnetic, in that order (those enabled)."""
-        if self._model is not None:
-            return self._model
+        then gravity gradient, drag, SRP, magnetic, in that order (those enabled); built once,
+        by :meth:`kernel_model`."""
         okind, oparams, otable = km.from_spec(self.kind, self.params, self.table)
         orbit_row = (int(okind[0, km.KIND]), oparams[okind[0, km.P0]:okind[0, km.P1]],
                      otable[okind[0, km.R0]:okind[0, km.R1]] if okind[0, km.R1] > okind[0, km.R0] else None)
@@ -226,12 +225,17 @@ class EnvironmentTorques(Potential):
             s = self._samples(MAGNETIC_FIELD_STEP)
             rows.append((km.MAGNETIC, self.residual_dipole * 1e-6, tabulate(s, self.magnetic_field.field)))
         self.term_kinds = [r[0] for r in rows]
-        self._model = km.build(orbit=orbit_row, terms=rows)
-        return self._model
+        return km.build(orbit=orbit_row, terms=rows)
 
     def control_row(self, wheels):
         """The model row of the control law (:mod:`orbatt.control`) for a body with ``wheels``,
-        with the field it reads sampled along the orbit."""
+        with the field it reads sampled along the orbit (sampled once per set of wheels)."""
+        key = tuple(wheels)
+        if key not in self._control_rows:
+            self._control_rows[key] = self._control_row(wheels)
+        return self._control_rows[key]
+
+    def _control_row(self, wheels):
         if isinstance(self.control, BDotControl):
             s = self._samples(MAGNETIC_FIELD_STEP)
             return self.control.row(tabulate(s, self.magnetic_field.field))

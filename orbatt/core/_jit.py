@@ -107,6 +107,13 @@ def borrow(typingctx, arr):
     return arr(arr), codegen
 
 
+@jit_inline
+def borrow_model(terms, params, table, work):
+    """:func:`borrow` views of the model ``terms, params, table`` and the scratch ``work``
+    (what every step loop hands on to the right-hand side)."""
+    return borrow(terms), borrow(params), borrow(table), borrow(work)
+
+
 @intrinsic
 def keepalive(typingctx, arr):
     """A use of ``arr`` that generates no code: numba frees a local array right after its last

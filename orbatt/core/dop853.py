@@ -168,10 +168,30 @@ def next_after_reject(hh, fac11):
 
 @jit_inline
 def reject_nonfinite(cnt, flags, hh):
-    """Count a rejection for a non-finite error or derivative: ``(flags, h)`` with the
-    non-finite flag set and the step cut tenfold."""
+    """Count a rejection for a non-finite error or derivative: ``(flags, h, rejected)`` with
+    the non-finite flag set, the step cut tenfold and ``rejected`` True."""
     cnt[CNT_REJECTED] += 1
-    return flags | FLAG_NONFINITE, 0.1 * hh
+    return flags | FLAG_NONFINITE, 0.1 * hh, True
+
+
+@jit_inline
+def reject_step(cnt, flags, hh, fac11):
+    """Count a rejection for a too large (finite) error: ``(flags, h, rejected)`` with the
+    non-finite flag cleared, the smaller step (:func:`next_after_reject`) and ``rejected``
+    True."""
+    cnt[CNT_REJECTED] += 1
+    return flags & ~FLAG_NONFINITE, next_after_reject(hh, fac11), True
+
+
+@jit_inline
+def accept_step(cnt, flags, err, hnew, hh, h, max_step, rejected_before, landing):
+    """Count an accepted step of size ``hh`` and error ``err``: ``(flags, facold, hnew,
+    rejected)`` with the non-finite flag cleared, the controller's memory, the next step
+    (:func:`next_after_accept` of the controller's proposal ``hnew``) and ``rejected``
+    False."""
+    cnt[CNT_STEPS] += 1
+    return (flags & ~FLAG_NONFINITE, max(err, 1.0e-4),
+            next_after_accept(hnew, hh, h, max_step, rejected_before, landing), False)
 
 
 @jit_inline
@@ -199,24 +219,34 @@ def hinit_der2(y, f0, f1, atol, aQ, rtol):
 
 
 @jit_inline
+def all_finite(v, n):
+    """Whether the first ``n`` components of ``v`` are finite."""
+    for i in range(n):
+        if not (abs(v[i]) < np.inf):
+            return False
+    return True
+
+
+@jit_inline
 def failure(flags):
     """The status of a run whose step size underflowed."""
     return NONFINITE if (flags & FLAG_NONFINITE) != 0 else STEP_TOO_SMALL
 
 
 @jit_inline
-def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags):
-    """``(status, hh, landing)`` before a step attempt: :data:`DONE` to attempt the step ``hh``
-    (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``, step-size
-    underflow)."""
+def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out, hmin, flags):
+    """``(status, hh, landing, t_next)`` before a step attempt towards the next output time
+    ``t_next = t_out[i_out]``: :data:`DONE` to attempt the step ``hh`` (:func:`plan_step`),
+    else why to stop (budget of this call, ``max_steps``, step-size underflow)."""
+    t_next = t_out[i_out]
     if attempts >= budget:
-        return PAUSED, 0.0, False
+        return PAUSED, 0.0, False, t_next
     if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
-        return MAX_STEPS, 0.0, False
+        return MAX_STEPS, 0.0, False, t_next
     hh, landing = plan_step(t, h, max_step, t_next)
     if hh <= 0.0 or (hh <= hmin and not landing):
-        return failure(flags), hh, landing
-    return DONE, hh, landing
+        return failure(flags), hh, landing, t_next
+    return DONE, hh, landing, t_next
 
 
 # ---------------------------------------------------------------------------------------
@@ -338,8 +368,8 @@ def _advance_of(width, extended):
             if record_all and cnt[CNT_NREC] >= cap:
                 status = BUFFER_FULL
                 break
-            t_next = t_out[i_out]
-            status, hh, landing = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags)
+            status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out,
+                                                        hmin, flags)
             if status != DONE:
                 break
             # --- the 12 stages
@@ -379,8 +409,7 @@ def _advance_of(width, extended):
             err = error_norm(e5, e3, hh, ncomp)
             attempts += 1
             if not (err < np.inf):  # NaN or inf: shrink hard and retry
-                flags, h = reject_nonfinite(cnt, flags, hh)
-                reject = True
+                flags, h, reject = reject_nonfinite(cnt, flags, hh)
                 continue
             fac11, hnew = controller(err, facold, hh)
             if err <= 1.0:
@@ -391,23 +420,14 @@ def _advance_of(width, extended):
                 else:
                     rhs(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
                 cnt[CNT_NFEV] += 1
-                ok = True
-                for i in range(ncomp):
-                    if not (abs(K[N_STAGES, i]) < np.inf):
-                        ok = False
-                if not ok:
-                    flags, h = reject_nonfinite(cnt, flags, hh)
-                    reject = True
+                if not all_finite(K[N_STAGES], ncomp):
+                    flags, h, reject = reject_nonfinite(cnt, flags, hh)
                     continue
-                flags &= ~FLAG_NONFINITE
-                facold = max(err, 1.0e-4)
-                cnt[CNT_STEPS] += 1
-                t = t_new
+                flags, facold, hnew, reject = accept_step(cnt, flags, err, hnew, hh, h, max_step, reject, landing)
                 for i in range(ncomp):
                     y[i] = ynew[i]
                     K[0, i] = K[N_STAGES, i]
-                hnew = next_after_accept(hnew, hh, h, max_step, reject, landing)
-                reject = False
+                t = t_new
                 if landing:
                     if not record_all:
                         for i in range(ncomp):
@@ -421,10 +441,7 @@ def _advance_of(width, extended):
                     cnt[CNT_NREC] = nrec + 1
                 h = hnew
             else:
-                cnt[CNT_REJECTED] += 1
-                flags &= ~FLAG_NONFINITE
-                reject = True
-                h = next_after_reject(hh, fac11)
+                flags, h, reject = reject_step(cnt, flags, hh, fac11)
         st[ST_T] = t
         st[ST_H] = h
         st[ST_FACOLD] = facold

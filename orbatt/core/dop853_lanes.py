@@ -16,11 +16,11 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ._jit import (BAD_LANE_SHIFT, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_NONFINITE, FLAG_REJECTED, NDIM, borrow,
-                   jit, jit_parallel, keepalive)
-from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_REJECTED, CNT_STEPS, ST_FACOLD, ST_H, ST_T, begin_attempt,
-                     controller, error_norm, hinit_der2, hinit_guess, hinit_norms, hinit_refine, momentum_scale,
-                     next_after_accept, next_after_reject, reject_nonfinite)
+from ._jit import (BAD_LANE_SHIFT, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, NDIM, borrow,
+                   borrow_model, jit, jit_parallel, keepalive)
+from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, ST_FACOLD, ST_H, ST_T, accept_step, begin_attempt, controller,
+                     error_norm, hinit_der2, hinit_guess, hinit_norms, hinit_refine, momentum_scale, reject_nonfinite,
+                     reject_step)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES
 from .hamiltonian import rhs_lanes
 
@@ -41,10 +41,7 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
     i_out = cnt[CNT_IOUT]
     if i_out >= nout:
         return DONE
-    terms = borrow(terms)
-    params = borrow(params)
-    table = borrow(table)
-    work = borrow(work)
+    terms, params, table, work = borrow_model(terms, params, table, work)
     # structure-of-arrays copies (lane index last)
     Kown = np.empty((N_STAGES + 1, NDIM, nl))
     tmpown = np.empty((3, NDIM, nl))
@@ -106,8 +103,8 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
     hmin = 10.0 * EPS * max(abs(t), abs(t_out[nout - 1]))
     bad_lane = -1
     while i_out < nout:
-        t_next = t_out[i_out]
-        status, hh, landing = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_next, hmin, flags)
+        status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out, hmin,
+                                                    flags)
         if status != DONE:
             break
         for s in range(1, N_STAGES):
@@ -154,8 +151,7 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
             err = max(err, el)
         attempts += 1
         if not (err < np.inf):
-            flags, h = reject_nonfinite(cnt, flags, hh)
-            reject = True
+            flags, h, reject = reject_nonfinite(cnt, flags, hh)
             continue
         fac11, hnew = controller(err, facold, hh)
         if err <= 1.0:
@@ -169,19 +165,14 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
                         ok = False
                         bad_lane = l
             if not ok:
-                flags, h = reject_nonfinite(cnt, flags, hh)
-                reject = True
+                flags, h, reject = reject_nonfinite(cnt, flags, hh)
                 continue
-            flags &= ~FLAG_NONFINITE
-            facold = max(err, 1.0e-4)
-            cnt[CNT_STEPS] += 1
-            t = t_new
+            flags, facold, hnew, reject = accept_step(cnt, flags, err, hnew, hh, h, max_step, reject, landing)
             for i in range(NDIM):
                 for l in range(nl):
                     yg[i, l] = ynew[i, l]
                     K[0, i, l] = K[N_STAGES, i, l]
-            hnew = next_after_accept(hnew, hh, h, max_step, reject, landing)
-            reject = False
+            t = t_new
             if landing:
                 for l in range(nl):
                     for i in range(NDIM):
@@ -189,10 +180,7 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
                 i_out += 1
             h = hnew
         else:
-            cnt[CNT_REJECTED] += 1
-            flags &= ~FLAG_NONFINITE
-            reject = True
-            h = next_after_reject(hh, fac11)
+            flags, h, reject = reject_step(cnt, flags, hh, fac11)
     for l in range(nl):
         for i in range(NDIM):
             Y[l, i] = yg[i, l]
@@ -218,11 +206,7 @@ def advance_lanes(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, 
     """:func:`advance_group` over the groups ``[g lanes, (g + 1) lanes)`` of an ensemble, in
     parallel over groups. ``ST, CNT, WORK, status`` have one row per group."""
     E = Y.shape[0]
-    G = (E + lanes - 1) // lanes
-    for gi in nb.prange(G):
-        if CNT[gi, CNT_IOUT] >= t_out.shape[0]:
-            status[gi] = DONE
-            continue
+    for gi in nb.prange((E + lanes - 1) // lanes):  # (a group that is done returns DONE at once)
         a = gi * lanes
         b = min(E, a + lanes)
         status[gi] = advance_group(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, out_y[a:b], inertia[a:b], terms, params,

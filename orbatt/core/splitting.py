@@ -51,13 +51,14 @@ operations of :func:`advance`, so results are identical to one-by-one runs.
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numba as nb
 import numpy as np
 
-from ._jit import (DONE, EPS, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, jit, jit_inline,
-                   jit_parallel, keepalive)
+from ._jit import (DONE, EPS, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, borrow_model, jit,
+                   jit_inline, jit_parallel, keepalive)
 from .hamiltonian import rhs_inline, rhs_lanes
 from .model import gradient, gradient_lanes
 from .qalg import qmul
@@ -140,7 +141,15 @@ def _kinetic_block(kinetic, tau, toff):
 def sequence(gammas, kinetic="shifted"):
     """Flatten the composition ``S(g_s h) ... S(g_1 h)`` of kick-drift-kick Strang steps into
     ``(flow, weight, toff)`` arrays: flow codes, durations and kick time offsets in units of
-    ``h``. Adjacent kicks and adjacent rotations of the same kind are merged."""
+    ``h``. Adjacent kicks and adjacent rotations of the same kind are merged. (Fresh copies of
+    arrays flattened once per composition and ``kinetic``.)"""
+    flow, weight, toff = _flatten(tuple(float(g) for g in gammas), kinetic)
+    return flow.copy(), weight.copy(), toff.copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _flatten(gammas, kinetic):
+    """:func:`sequence` of the tuple ``gammas`` (cached)."""
     ops = []
     t = 0.0
     for g in gammas:
@@ -235,6 +244,15 @@ def _rot_g(q, Q, ctau):
 
 
 @jit_inline
+def _rotate(q, Q, f, axes, coef, tau):
+    """The exact flow of the rotation ``f`` (:data:`ROT_A` .. :data:`ROT_G`) for a time
+    ``tau``, with the body's ``axes (3,)`` and ``coef (4,)`` of :func:`rotation_setup`."""
+    if f == ROT_G:
+        return _rot_g(q, Q, coef[3] * tau)
+    return _rot_axis(q, Q, axes[f - 1], coef[f - 1] * tau)
+
+
+@jit_inline
 def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, params, table, work, gc, gvalid):
     """One composed splitting step of length ``h`` from time ``t``. ``gc``/``gvalid``: the
     cached gradient at ``(t, q)``. Returns ``(q, Q, gc, gvalid, evaluations)``."""
@@ -242,19 +260,15 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, para
     for j in range(flow.shape[0]):
         f = flow[j]
         tau = weight[j] * h
-        if f == KICK:
-            if terms.shape[0] > 1:
-                if not gvalid:
-                    _, gc = gradient(t + toff[j] * h, q, inertia, terms, params, table, work)
-                    nev += 1
-                    gvalid = True
-                Q = (Q[0] - tau * gc[0], Q[1] - tau * gc[1], Q[2] - tau * gc[2], Q[3] - tau * gc[3])
-        elif f == ROT_G:
-            q, Q = _rot_g(q, Q, coef[3] * tau)
+        if f != KICK:
+            q, Q = _rotate(q, Q, f, axes, coef, tau)
             gvalid = False
-        else:
-            q, Q = _rot_axis(q, Q, axes[f - 1], coef[f - 1] * tau)
-            gvalid = False
+        elif terms.shape[0] > 1:
+            if not gvalid:
+                _, gc = gradient(t + toff[j] * h, q, inertia, terms, params, table, work)
+                nev += 1
+                gvalid = True
+            Q = (Q[0] - tau * gc[0], Q[1] - tau * gc[1], Q[2] - tau * gc[2], Q[3] - tau * gc[3])
     return q, Q, gc, gvalid, nev
 
 
@@ -275,19 +289,41 @@ def _rk4_step(y, t, h, inertia, terms, params, table, work, K, ytmp):
 
 
 @jit_inline
-def plan_grid_step(t0, k, h, tk, tt, tol, max_steps, done_here, budget):
-    """``(status, full, step)``: the next step from the grid point ``tk = t0 + k h`` towards
-    the output time ``tt``: a full grid step, or the partial step to ``tt`` when ``tt`` falls
-    before the next grid point; status :data:`DONE` to go on, else why to stop."""
+def plan_grid_step(t_out, i_out, t0, k, h, max_steps, done_here, budget):
+    """``(at_output, status, full, tk, step)`` at the grid point ``tk = t0 + k h`` for the
+    next output time ``tt = t_out[i_out]``: ``at_output`` when ``tk`` is ``tt`` (to
+    rounding); else the next step towards ``tt``, a full grid step or the partial step to
+    ``tt`` when ``tt`` falls before the next grid point, with status :data:`DONE` to take it,
+    else why to stop."""
+    tt = t_out[i_out]
+    tk = t0 + k * h
+    tol = 4.0 * EPS * max(abs(tt), abs(tk))
+    if abs(tt - tk) <= tol:
+        return True, DONE, False, tk, 0.0
     if done_here >= budget:
-        return PAUSED, False, 0.0
+        return False, PAUSED, False, tk, 0.0
     full = t0 + (k + 1) * h <= tt + tol
     if full and k >= max_steps:
-        return MAX_STEPS, full, 0.0
+        return False, MAX_STEPS, full, tk, 0.0
     step = h if full else tt - tk
     if step <= 0.0:
-        return STEP_TOO_SMALL, full, step
-    return DONE, full, step
+        return False, STEP_TOO_SMALL, full, tk, step
+    return False, DONE, full, tk, step
+
+
+@jit_inline
+def load_counters(cnt):
+    """``(k, i_out, steps, evaluations)`` from the counters ``cnt``."""
+    return cnt[CNT_K], cnt[CNT_IOUT], cnt[CNT_STEPS], cnt[CNT_EVALS]
+
+
+@jit_inline
+def save_counters(cnt, k, i_out, steps, nev):
+    """Store the counters of :func:`load_counters` back into ``cnt``."""
+    cnt[CNT_K] = k
+    cnt[CNT_IOUT] = i_out
+    cnt[CNT_STEPS] = steps
+    cnt[CNT_EVALS] = nev
 
 
 @jit_inline
@@ -310,25 +346,17 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
     ``t0 + cnt[CNT_K] h``).
     """
     nout = t_out.shape[0]
-    i_out = cnt[CNT_IOUT]
+    k, i_out, steps, nev = load_counters(cnt)
     if i_out >= nout:
         return DONE
     y = borrow(y)
     inertia = borrow(inertia)
-    terms = borrow(terms)
-    params = borrow(params)
-    table = borrow(table)
-    work = borrow(work)
-    flow = borrow(flow)
-    weight = borrow(weight)
-    toff = borrow(toff)
+    terms, params, table, work = borrow_model(terms, params, table, work)
+    flow, weight, toff = borrow(flow), borrow(weight), borrow(toff)
     axes = borrow(axes)
     coef = borrow(coef)
     scratch_own = np.empty((6, NDIM))
     scratch = borrow(scratch_own)
-    k = cnt[CNT_K]
-    steps = cnt[CNT_STEPS]
-    nev = cnt[CNT_EVALS]
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
     gc = (st[0], st[1], st[2], st[3])
@@ -336,15 +364,12 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
     status = DONE
     done_here = 0
     while i_out < nout:
-        tt = t_out[i_out]
-        tk = t0 + k * h
-        tol = 4.0 * EPS * max(abs(tt), abs(tk))
-        if abs(tt - tk) <= tol:
+        at_output, status, full, tk, step = plan_grid_step(t_out, i_out, t0, k, h, max_steps, done_here, budget)
+        if at_output:
             out_y[i_out, 0], out_y[i_out, 1], out_y[i_out, 2], out_y[i_out, 3] = q
             out_y[i_out, 4], out_y[i_out, 5], out_y[i_out, 6], out_y[i_out, 7] = Q
             i_out += 1
             continue
-        status, full, step = plan_grid_step(t0, k, h, tk, tt, tol, max_steps, done_here, budget)
         if status != DONE:
             break
         if method == SPLITTING:
@@ -377,10 +402,7 @@ def advance(y, st, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, c
     y[4], y[5], y[6], y[7] = Q
     st[0], st[1], st[2], st[3] = gc
     st[4] = 1.0 if gvalid else 0.0
-    cnt[CNT_K] = k
-    cnt[CNT_IOUT] = i_out
-    cnt[CNT_STEPS] = steps
-    cnt[CNT_EVALS] = nev
+    save_counters(cnt, k, i_out, steps, nev)
     keepalive(scratch_own)
     return status
 
@@ -397,29 +419,21 @@ def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, terms, params
     for j in range(flow.shape[0]):
         f = flow[j]
         tau = weight[j] * h
-        if f == KICK:
-            if terms.shape[0] > 1:
-                if not gvalid:
-                    gradient_lanes(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
-                    nev += 1
-                    gvalid = True
-                for i in range(4):
-                    for l in range(nl):
-                        yg[4 + i, l] = yg[4 + i, l] - tau * G[i, l]
-        elif f == ROT_G:
+        if f != KICK:
             for l in range(nl):
-                q, Q = _rot_g((yg[0, l], yg[1, l], yg[2, l], yg[3, l]), (yg[4, l], yg[5, l], yg[6, l], yg[7, l]),
-                              CF[3, l] * tau)
+                q, Q = _rotate((yg[0, l], yg[1, l], yg[2, l], yg[3, l]), (yg[4, l], yg[5, l], yg[6, l], yg[7, l]), f,
+                               AX[:, l], CF[:, l], tau)
                 yg[0, l], yg[1, l], yg[2, l], yg[3, l] = q
                 yg[4, l], yg[5, l], yg[6, l], yg[7, l] = Q
             gvalid = False
-        else:
-            for l in range(nl):
-                q, Q = _rot_axis((yg[0, l], yg[1, l], yg[2, l], yg[3, l]), (yg[4, l], yg[5, l], yg[6, l], yg[7, l]),
-                                 AX[f - 1, l], CF[f - 1, l] * tau)
-                yg[0, l], yg[1, l], yg[2, l], yg[3, l] = q
-                yg[4, l], yg[5, l], yg[6, l], yg[7, l] = Q
-            gvalid = False
+        elif terms.shape[0] > 1:
+            if not gvalid:
+                gradient_lanes(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
+                nev += 1
+                gvalid = True
+            for i in range(4):
+                for l in range(nl):
+                    yg[4 + i, l] = yg[4 + i, l] - tau * G[i, l]
     return gvalid, nev
 
 
@@ -444,6 +458,22 @@ def _rk4_step_lanes(yg, nl, t, h, I, terms, params, table, work, K, ytmp, G):
             yg[i, l] += h / 6.0 * (K[0, i, l] + 2.0 * (K[1, i, l] + K[2, i, l]) + K[3, i, l])
 
 
+@jit_inline
+def _copy_rows(dst, src, rows, nl):
+    """``dst[:rows, :nl] = src[:rows, :nl]`` (lanes last)."""
+    for i in range(rows):
+        for l in range(nl):
+            dst[i, l] = src[i, l]
+
+
+@jit_inline
+def _store_output(out_y, i_out, yg, nl):
+    """Output ``i_out`` of every lane: ``out_y[l, i_out] = yg[:, l]``."""
+    for l in range(nl):
+        for i in range(NDIM):
+            out_y[l, i_out, i] = yg[i, l]
+
+
 @jit
 def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, axes, coef, inertia, terms, params,
                   table, work, max_steps, budget):
@@ -455,16 +485,11 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
     """
     nl = Y.shape[0]
     nout = t_out.shape[0]
-    i_out = cnt[CNT_IOUT]
+    k, i_out, steps, nev = load_counters(cnt)
     if i_out >= nout:
         return DONE
-    terms = borrow(terms)
-    params = borrow(params)
-    table = borrow(table)
-    work = borrow(work)
-    flow = borrow(flow)
-    weight = borrow(weight)
-    toff = borrow(toff)
+    terms, params, table, work = borrow_model(terms, params, table, work)
+    flow, weight, toff = borrow(flow), borrow(weight), borrow(toff)
     own = np.empty((2, NDIM, nl))
     yg = borrow(own[0])
     yn = borrow(own[1])
@@ -491,31 +516,19 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
             I[i, l] = inertia[l, i]
             AX[i, l] = axes[l, i]
     gvalid = ST[0, 4] != 0.0
-    k = cnt[CNT_K]
-    steps = cnt[CNT_STEPS]
-    nev = cnt[CNT_EVALS]
     status = DONE
     done_here = 0
     while i_out < nout:
-        tt = t_out[i_out]
-        tk = t0 + k * h
-        tol = 4.0 * EPS * max(abs(tt), abs(tk))
-        if abs(tt - tk) <= tol:
-            for l in range(nl):
-                for i in range(NDIM):
-                    out_y[l, i_out, i] = yg[i, l]
+        at_output, status, full, tk, step = plan_grid_step(t_out, i_out, t0, k, h, max_steps, done_here, budget)
+        if at_output:
+            _store_output(out_y, i_out, yg, nl)
             i_out += 1
             continue
-        status, full, step = plan_grid_step(t0, k, h, tk, tt, tol, max_steps, done_here, budget)
         if status != DONE:
             break
-        for i in range(NDIM):
-            for l in range(nl):
-                yn[i, l] = yg[i, l]
+        _copy_rows(yn, yg, NDIM, nl)
         if method == SPLITTING:
-            for i in range(4):
-                for l in range(nl):
-                    Gn[i, l] = G[i, l]
+            _copy_rows(Gn, G, 4, nl)
             gvn, ne = _split_step_lanes(yn, nl, tk, step, flow, weight, toff, AX, CF, I, terms, params, table, work,
                                         Gn, gvalid)
             nev += ne
@@ -536,19 +549,13 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
             status = NONFINITE
             break
         if full:
-            for i in range(NDIM):
-                for l in range(nl):
-                    yg[i, l] = yn[i, l]
+            _copy_rows(yg, yn, NDIM, nl)
             if method == SPLITTING:
-                for i in range(4):
-                    for l in range(nl):
-                        G[i, l] = Gn[i, l]
+                _copy_rows(G, Gn, 4, nl)
             gvalid = gvn
             k += 1
         else:
-            for l in range(nl):
-                for i in range(NDIM):
-                    out_y[l, i_out, i] = yn[i, l]
+            _store_output(out_y, i_out, yn, nl)
             i_out += 1
     for l in range(nl):
         for i in range(NDIM):
@@ -556,10 +563,7 @@ def advance_group(Y, ST, cnt, t_out, out_y, t0, h, method, flow, weight, toff, a
         for i in range(4):
             ST[l, i] = G[i, l]
         ST[l, 4] = 1.0 if gvalid else 0.0
-    cnt[CNT_K] = k
-    cnt[CNT_IOUT] = i_out
-    cnt[CNT_STEPS] = steps
-    cnt[CNT_EVALS] = nev
+    save_counters(cnt, k, i_out, steps, nev)
     keepalive(own)
     keepalive(Gown)
     keepalive(Kown)
@@ -576,11 +580,7 @@ def advance_lanes(Y, ST, GCNT, t_out, out_y, status, t0, h, method, flow, weight
     """:func:`advance_group` over the groups ``[g lanes, (g + 1) lanes)`` of an ensemble, in
     parallel over groups; ``GCNT, GWORK, status`` have one row per group."""
     E = Y.shape[0]
-    G = (E + lanes - 1) // lanes
-    for gi in nb.prange(G):
-        if GCNT[gi, CNT_IOUT] >= t_out.shape[0]:
-            status[gi] = DONE
-            continue
+    for gi in nb.prange((E + lanes - 1) // lanes):  # (a group that is done returns DONE at once)
         a = gi * lanes
         b = min(E, a + lanes)
         status[gi] = advance_group(Y[a:b], ST[a:b], GCNT[gi], t_out, out_y[a:b], t0, h, method, flow, weight, toff,

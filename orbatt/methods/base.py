@@ -87,7 +87,8 @@ def count_totals(counters: np.ndarray, columns: dict, sizes=None) -> dict:
     """
     if sizes is not None:
         counters = counters * sizes[:, None]
-    return {name: int(counters[:, col].sum()) for name, col in columns.items()}
+    totals = counters.sum(axis=0).tolist()  # one reduction for every column
+    return {name: int(totals[col]) for name, col in columns.items()}
 
 
 class Method:
@@ -189,6 +190,11 @@ class Method:
     def check_status(self, status: np.ndarray) -> bool:
         """After a compiled call: raise for the first entry of ``status`` (kernel status
         codes, one per member or group) that failed, else return whether all are done."""
+        if status.shape[0] == 1:  # one member or group: the same tests on a Python int
+            code = int(status[0])
+            if code != kd.DONE and code != kd.PAUSED:
+                self.fail(code, *self.failure_point(0))
+            return code == kd.DONE
         bad = np.flatnonzero((status != kd.DONE) & (status != kd.PAUSED))
         if bad.size:
             i = int(bad[0])

@@ -128,7 +128,7 @@ def initial_states(state0, bodies):
     if state0.body.dimensionless != b0.dimensionless:
         raise InputError("state0: built for a body with different units (dimensional vs dimensionless) than body")
     y = np.asarray(state0.y, dtype=np.float64)
-    if not np.all(np.isfinite(y)):
+    if not np.isfinite(y).all():
         raise InputError(f"state0: contains non-finite values (q = {state0.q!r}, Q = {state0.Q!r})")
     if y.ndim > 2:
         raise InputError(f"state0: an ensemble state must have q of shape (E, 4), got {state0.q.shape}")
@@ -138,9 +138,11 @@ def initial_states(state0, bodies):
     if len(bodies) not in (1, E) or y.shape[0] not in (1, E):
         raise InputError(f"body/state0: {len(bodies)} bodies and {y.shape[0]} initial states do not broadcast to "
                          "one ensemble (give one of each, or N bodies and N states, or one and N)")
-    y0 = np.ascontiguousarray(np.broadcast_to(y, (E, NDIM)), dtype=np.float64).copy()
-    inertia = np.ascontiguousarray(np.broadcast_to(np.array([b.inertia_value for b in bodies]), (E, 3)),
-                                   dtype=np.float64).copy()
+    # fresh C-contiguous copies (a broadcast only where one side is a single member)
+    y0 = np.array(y if y.shape[0] == E else np.broadcast_to(y, (E, NDIM)), dtype=np.float64, order="C")
+    inertia = np.array([b.inertia_value for b in bodies], dtype=np.float64)
+    if inertia.shape[0] != E:
+        inertia = np.array(np.broadcast_to(inertia, (E, 3)), order="C")
     wheels = b0.wheels
     if any(b.wheels != wheels for b in bodies):
         raise InputError("body: the members of an ensemble must have the same reaction wheels")
@@ -166,17 +168,14 @@ def kernel_spec(potential, bodies) -> KernelSpec:
     if hasattr(potential, "check_body"):
         for b in set(bodies):
             potential.check_body(b)
-    params = np.array(potential.params, dtype=np.float64).ravel()
     table = np.asarray(potential.table, dtype=np.float64)
-    if not (table.flags.c_contiguous and table.flags.writeable):
-        table = np.array(table, order="C")
     if table.ndim != 2:
         raise InputError(f"potential.table: expected a 2-D array, got shape {table.shape}")
     if hasattr(potential, "kernel_model"):
-        model = potential.kernel_model()
+        model = potential.kernel_model()  # built once per potential, fresh copies
     else:
-        try:
-            model = km.from_spec(int(potential.kind), params, table)
+        try:  # from_spec copies params and table into fresh arrays
+            model = km.from_spec(int(potential.kind), potential.params, table)
         except ValueError as exc:
             raise InputError(f"potential: {exc}") from None
     wheels = bodies[0].wheels
@@ -220,8 +219,8 @@ def time_span(t, t_span, body, potential):
     if tv is not None:
         if tv.ndim != 1 or tv.size == 0:
             raise InputError(f"t: expected a 1-D array of output times, got shape {tv.shape}")
-        d = np.diff(tv)
-        if np.any(d <= 0):
+        d = tv[1:] - tv[:-1]  # (np.diff's overhead is most of the cost for a few times)
+        if not (d > 0).all():
             i = int(np.flatnonzero(d <= 0)[0])
             raise InputError(f"t: output times must increase strictly; t[{i + 1}] = {float(tv[i + 1])!r} follows "
                              f"t[{i}] = {float(tv[i])!r} (orbatt integrates forward in time)")
