@@ -34,6 +34,14 @@ def gradient_of_torque(q, tau):
 
 
 @jit_inline
+def add_lever_torque(tx, ty, tz, params, b, F):
+    """``(tx, ty, tz) + r x F``: the torque of the force ``F`` (body axes) at the centre of
+    pressure ``r = params[b + 4 : b + 7]`` of the facet at ``params[b]``, added to a sum."""
+    t = cross((params[b + 4], params[b + 5], params[b + 6]), F)
+    return tx + t[0], ty + t[1], tz + t[2]
+
+
+@jit_inline
 def facet_drag(q, k, vhat_s, params, p0, nfacets):
     """Drag torque (body axes) of ``nfacets`` facets at ``params[p0:]`` for the attitude ``q``,
     ``k = 1/2 rho |v|^2`` and the unit relative velocity ``vhat_s`` in inertial axes."""
@@ -46,11 +54,7 @@ def facet_drag(q, k, vhat_s, params, p0, nfacets):
         cos = params[b + 1] * v[0] + params[b + 2] * v[1] + params[b + 3] * v[2]
         if cos > 0.0:
             s = -k * params[b] * cos
-            F = (s * v[0], s * v[1], s * v[2])
-            t = cross((params[b + 4], params[b + 5], params[b + 6]), F)
-            tx += t[0]
-            ty += t[1]
-            tz += t[2]
+            tx, ty, tz = add_lever_torque(tx, ty, tz, params, b, (s * v[0], s * v[1], s * v[2]))
     return (tx, ty, tz)
 
 
@@ -73,11 +77,8 @@ def facet_srp(q, pressure, shat_s, params, p0, nfacets):
             a = -pressure * params[b] * cos
             ks = a * (1.0 - cs)
             kn = a * 2.0 * (cs * cos + cd / 3.0)
-            F = (ks * s[0] + kn * n[0], ks * s[1] + kn * n[1], ks * s[2] + kn * n[2])
-            t = cross((params[b + 4], params[b + 5], params[b + 6]), F)
-            tx += t[0]
-            ty += t[1]
-            tz += t[2]
+            tx, ty, tz = add_lever_torque(tx, ty, tz, params, b, (ks * s[0] + kn * n[0], ks * s[1] + kn * n[1],
+                                                                  ks * s[2] + kn * n[2]))
     return (tx, ty, tz)
 
 
