@@ -134,6 +134,24 @@ def test_potential_object_and_validation(paper):
         gr.evaluate(RigidBody(INERTIA * u.kg * u.km**2), [0.0, 601.0], np.tile(Q0_PAPER, (2, 1)))
 
 
+def test_kernel_model_is_built_once_and_handed_out_as_copies(paper):
+    """A potential builds its model once; kernel_model() hands out writeable copies (a caller
+    changing them changes no later call or run), and the potential's parameters are
+    read-only (the cached model cannot go stale)."""
+    gg = GravityGradient(paper)
+    first = gg.kernel_model()
+    expected = km.from_spec(gg.kind, gg.params, gg.table)
+    assert all(np.array_equal(a, b) for a, b in zip(first, expected))
+    for a in first:
+        assert a.flags.writeable and a.flags.c_contiguous
+        a[...] = 0
+    again = gg.kernel_model()
+    assert all(np.array_equal(a, b) for a, b in zip(again, expected))
+    assert all(a is not b for a, b in zip(again, first))
+    with pytest.raises(ValueError, match="read-only"):
+        gg.params[0] = 1.0
+
+
 # ---- the paper's Sect. 6.2 case against the classical model --------------------------------
 @nb.njit(cache=False)
 def _classical_rhs(t, y, inertia, gm, orb, work):
