@@ -121,12 +121,14 @@ SHADOW_NONE, SHADOW_CYLINDRICAL, SHADOW_CONICAL = 0, 1, 2
 # Kernels
 
 
-@jit
+@jit_inline
 def orbit_radial(t, terms, params, table, work):
     """``(r, xhat, v)``: radius, radial unit vector and velocity (inertial components) of the
     model's orbit at ``t``. The velocity is computed only when a term reads it (row 0's
     :data:`NEEDS_VELOCITY` flag; else zero), and ``r``, ``xhat`` are the same numbers either
-    way; ``(1, (1, 0, 0), 0)`` when the model has no orbit."""
+    way; ``(1, (1, 0, 0), 0)`` when the model has no orbit. Inlined: a call passing four
+    arrays cost 30 ns of a 170 ns gravity-gradient evaluation (the Keplerian loops ran 5-10 %
+    slower than 0.1.0 with it called)."""
     kind = terms[0, KIND]
     if (terms[0, FLAGS] & NEEDS_VELOCITY) != 0:
         if kind == ORBIT_KEPLER:
