@@ -23,7 +23,7 @@ from .core import control as kc
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row",
+__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row", "wheel_axes_span",
            "extend_model"]
 
 #: a wheel axis or a Sun-pointing axis must have |a| = 1 within this
@@ -39,32 +39,27 @@ _N_M = 1e-6
 
 
 def _value(x, unit, name, *, positive=False, nonnegative=False, allow_none=False):
-    """A float of ``x`` (Quantity or string) in ``unit``, checked; None passes if allowed."""
+    """A float of ``x`` (Quantity or string, :func:`orbatt.units.strip`) in ``unit``, checked;
+    None passes if allowed."""
     if x is None:
         if allow_none:
             return None
         raise InputError(f"{name}: required")
-    if isinstance(x, str):
-        try:
-            x = u.Quantity(x)
-        except (TypeError, ValueError):
-            raise InputError(f"{name}: cannot parse {x!r} as a quantity, e.g. '1 {unit.to_string()}'") from None
-    if not isinstance(x, u.Quantity):
-        raise InputError(f"{name}: {x!r} needs a unit, e.g. {x} {unit.to_string()}")
-    try:
-        v = float(x.to_value(unit))
-    except u.UnitConversionError:
-        raise InputError(f"{name}: {x} has the wrong dimension; expected {unit.physical_type} "
-                         f"such as '1 {unit.to_string()}'") from None
-    except TypeError:
-        raise InputError(f"{name}: expected one value, got {x}") from None
-    if not np.isfinite(v):
-        raise InputError(f"{name}: {x} is not finite")
+    v = U.strip(x, unit, name)
+    if v.shape != ():
+        raise InputError(f"{name}: expected one value, got {x}")
+    v = float(v)
     if positive and not v > 0:
         raise InputError(f"{name}: {x} must be positive")
     if nonnegative and not v >= 0:
         raise InputError(f"{name}: {x} must not be negative")
     return v
+
+
+def wheel_axes_span(wheels):
+    """Whether the spin axes of ``wheels`` span three dimensions (else a wheel-actuated law
+    leaves an axis uncontrollable)."""
+    return bool(wheels) and np.linalg.matrix_rank(np.array([w.axis for w in wheels]), tol=1e-9) == 3
 
 
 def _unit_vector(v, name):
@@ -207,7 +202,7 @@ class PDControl:
             if not wheels:
                 raise InputError("actuator: 'wheels' needs the body's reaction wheels ([[body.wheels]])")
             axes = np.array([w.axis for w in wheels])
-            if np.linalg.matrix_rank(axes, tol=1e-9) < 3:
+            if not wheel_axes_span(wheels):
                 raise InputError(f"[[body.wheels]] axis: the {len(wheels)} wheel axes {axes.tolist()} do not span "
                                  "three dimensions, which leaves an axis uncontrollable; add or tilt a wheel")
         params = kc.pd_params(TARGETS[self.target], self.kp * _N_M, self.kd * _N_M, tmax, values, axes)

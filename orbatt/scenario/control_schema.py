@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 from astropy import units as u
 
-from ..control import BDotControl, PDControl, ReactionWheel
+from ..control import BDotControl, PDControl, ReactionWheel, wheel_axes_span
 from ..errors import InputError
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
@@ -173,8 +173,8 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
     if actuator == "wheels":
         if not wheels:
             raise ctx.error("[control] actuator", "'wheels' needs [[body.wheels]]; add the wheels or use 'ideal'")
-        axes = np.array([w.axis for w in wheels])
-        if np.linalg.matrix_rank(axes, tol=1e-9) < 3:
+        if not wheel_axes_span(wheels):
+            axes = np.array([w.axis for w in wheels])
             raise ctx.error("[[body.wheels]] axis", f"the {len(wheels)} wheel axes {axes.tolist()} do not span three "
                                                     "dimensions, which leaves an axis uncontrollable with actuator = "
                                                     "'wheels'; add or tilt a wheel")
