@@ -1,26 +1,40 @@
 """orbatt: satellite attitude coupled to the orbit, in the canonical quaternion variables of
-Arribas, Elipe & Palacios (2006). Conventions: :mod:`orbatt.quaternion`."""
+Arribas, Elipe & Palacios (2006). Conventions: :mod:`orbatt.quaternion`.
+
+``import orbatt`` is light (no numpy, numba or astropy): every public name below is loaded from
+its module on first use (PEP 562). ``orbatt run`` relies on that to choose, before numba is
+imported, whether a first run on an empty compile cache runs its kernels interpreted
+(:mod:`orbatt.coldstart`).
+"""
 from __future__ import annotations
 
-from . import canonical, euler, quaternion
-from .dataset.aem import read_aem, write_aem
-from .body import RigidBody
-from .dataset import open_dataset, to_dataset
 from .errors import InputError, IntegrationError, OrbattError, ScenarioError, SweepError
-from .potentials import HeavyTop, Potential, TorqueFree
-from . import methods  # the subpackage; its function methods() is orbatt.methods.methods
-from .methods import METHODS, Method, Problem, register
-from .progress import ProgressInfo
-from .propagation import propagate
-from .scenario import Scenario, load_scenario
-from .state import State
-from . import orbital
-from .orbital import inertial_attitude, orbital_attitude, state_from_orbital, to_orbital
-from .orbits import KeplerOrbit, ReboundOrbit, TleOrbit
-from .potentials import GravityGradient
-from .torques import EnvironmentTorques, Facet
-from .control import BDotControl, PDControl, ReactionWheel
 from .version import __version__
+from .xarray_hook import install_accessor_hook
+
+install_accessor_hook()  # ``ds.orbatt`` on every Dataset once xarray is imported, by whom and when it may be
+
+#: ``{public name: the module that defines it}`` (submodules map to themselves)
+_WHERE = {
+    "canonical": ".canonical", "euler": ".euler", "quaternion": ".quaternion", "orbital": ".orbital",
+    "methods": ".methods",
+    "read_aem": ".dataset.aem", "write_aem": ".dataset.aem",
+    "open_dataset": ".dataset", "to_dataset": ".dataset",
+    "RigidBody": ".body",
+    "HeavyTop": ".potentials", "Potential": ".potentials", "TorqueFree": ".potentials", "GravityGradient": ".potentials",
+    "METHODS": ".methods", "Method": ".methods", "Problem": ".methods", "register": ".methods",
+    "ProgressInfo": ".progress",
+    "propagate": ".propagation",
+    "Scenario": ".scenario", "load_scenario": ".scenario",
+    "State": ".state",
+    "inertial_attitude": ".orbital", "orbital_attitude": ".orbital", "state_from_orbital": ".orbital",
+    "to_orbital": ".orbital",
+    "KeplerOrbit": ".orbits", "ReboundOrbit": ".orbits", "TleOrbit": ".orbits",
+    "EnvironmentTorques": ".torques", "Facet": ".torques",
+    "BDotControl": ".control", "PDControl": ".control", "ReactionWheel": ".control",
+    "Sweep": ".sweep", "load_sweep": ".sweep", "run_sweep": ".sweep",
+}
+_SUBMODULES = {"canonical", "euler", "quaternion", "orbital", "methods"}
 
 __all__ = [
     "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",
@@ -33,19 +47,18 @@ __all__ = [
     "Sweep", "SweepError", "load_sweep", "run_sweep",
 ]
 
-#: names loaded on first use (``orbatt.Sweep`` ...): a run does not need the sweep machinery
-_LAZY = {"Sweep": "sweep", "load_sweep": "sweep", "run_sweep": "sweep"}
-
 
 def __getattr__(name):
-    if name in _LAZY:
-        import importlib
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
 
-        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module = importlib.import_module(where, __name__)
+    value = module if name in _SUBMODULES else getattr(module, name)
+    globals()[name] = value
+    return value
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_WHERE))

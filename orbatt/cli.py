@@ -89,6 +89,26 @@ def _parser():
 
 
 def _cmd_run(args):
+    from . import coldstart
+
+    cold = coldstart.plan(args.scenario, args.method)
+    if cold is not None:  # a first run of this kind: interpreted kernels, compiling in the background
+        os.environ["NUMBA_DISABLE_JIT"] = "1"  # before numba's import
+    try:
+        return _run(args, cold)
+    except Exception:
+        if cold is None:
+            raise
+        # an exception the interpreted kernels raise where compiled code gives inf/NaN, or any
+        # failure: the compiled run decides (bad input was refused before any kernel ran)
+        from .errors import InputError
+
+        if isinstance(sys.exc_info()[1], InputError):
+            raise
+        return cold.rerun_compiled(args.argv)
+
+
+def _run(args, cold):
     from .dataset import write_aem, write_netcdf
     from .errors import IntegrationError
     from .scenario import load_scenario
@@ -98,11 +118,33 @@ def _cmd_run(args):
     stem = _plot_stem(args, sc)
     aem = _aem_path(args, sc, out)
     t0 = time.perf_counter()
+    progress = not args.quiet
+    if cold is not None:  # the input is good: start compiling in the background, go on interpreted
+        from .coldstart import ENV_MODE
+        from .progress import progress_callback
+
+        cold.start_warm_up()
+        if not args.quiet:
+            print("orbatt: first run of this kind of scenario: the kernels run interpreted while they compile in "
+                  f"the background for the next runs (same results; {ENV_MODE}=compile waits for the compiler "
+                  "instead)", file=sys.stderr)
+        progress = cold.progress(progress_callback(progress))
+    import contextlib
+
+    import numpy as np
+
+    # interpreted kernels: numpy scalars warn where compiled code silently gives inf/NaN
+    quiet_numpy = np.errstate(all="ignore") if cold is not None else contextlib.nullcontext()
     try:  # the result's content: written and summarized without building the xarray Dataset
-        content = sc.run_content(method=args.method, progress=not args.quiet)
+        with quiet_numpy:
+            content = sc.run_content(method=args.method, progress=progress)
     except IntegrationError as exc:  # keep what was computed, marked incomplete, as Ctrl-C does
+        if cold is not None:
+            raise  # rerun compiled (_cmd_run)
         _write_partial(exc, out)
         raise
+    if cold is not None and cold.switched:  # the kernels compiled meanwhile: finish compiled
+        return cold.rerun_compiled(args.argv)
     wall = time.perf_counter() - t0
     write_netcdf(content, out)
     if not args.quiet:
@@ -404,6 +446,7 @@ def main(argv=None) -> int:
     from .errors import InputError, OrbattError
 
     args = _parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     if not args.debug:
         import warnings
 

@@ -8,10 +8,15 @@ settings.load_profile("orbatt")
 
 
 import importlib.util
+import os
 import warnings
 from pathlib import Path
 
 import pytest
+
+# `orbatt run` in a subprocess runs compiled, as in-process: a first run's interpreted kernels
+# and background warm-up (orbatt.coldstart) are tested on their own (tests/test_coldstart.py)
+os.environ.setdefault("ORBATT_COLD_START", "compile")
 
 SHIPPED = Path(__file__).parent.parent / "scenarios"
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"

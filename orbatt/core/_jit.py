@@ -83,28 +83,52 @@ FLAG_BITS = 0xFF       #: the flag bits proper
 BAD_LANE_SHIFT = 8     #: lockstep groups: ``(flags >> BAD_LANE_SHIFT) - 1`` is the first failing lane
 
 
-@intrinsic
-def borrow(typingctx, arr):
-    """A view of ``arr`` without a reference-counted owner (``meminfo = NULL``).
+#: the kernels run as plain Python (``NUMBA_DISABLE_JIT=1``, set by :mod:`orbatt.coldstart`
+#: for a first run on an empty compile cache): the same source, the same IEEE arithmetic and
+#: libm calls, so the same bits (tested on the shipped scenarios), ~1000x slower per step
+INTERPRETED = bool(nb.config.DISABLE_JIT)
 
-    numba increments and decrements the reference count of every array passed into a
-    compiled call (an atomic operation, ~5-10 ns each, and a contended cache line when
-    several threads share the array). Kernels here call the right-hand side 10^4-10^8 times
-    with the same arrays; passing borrowed views makes those updates no-ops
-    (``NRT_incref(NULL)`` returns at once): measured on the RHS of the torque-free case,
-    105 ns -> 30 ns per call. Safe only while the caller keeps the owner alive, i.e. inside
-    one kernel call on its own arguments; a borrowed view must never be returned or stored.
-    """
-    def codegen(context, builder, signature, args):
-        src = context.make_array(arr)(context, builder, value=args[0])
-        dst = context.make_array(arr)(context, builder)
-        dst.meminfo = cgutils.get_null_value(dst.meminfo.type)
-        dst.parent = cgutils.get_null_value(dst.parent.type)
-        for name in ("nitems", "itemsize", "data", "shape", "strides"):
-            setattr(dst, name, getattr(src, name))
-        return dst._getvalue()
+if INTERPRETED:
+    def borrow(arr):
+        """:func:`borrow` of the compiled kernels: in Python, the array itself."""
+        return arr
 
-    return arr(arr), codegen
+    def keepalive(arr):
+        """:func:`keepalive` of the compiled kernels: nothing to do in Python."""
+        return None
+else:
+    @intrinsic
+    def borrow(typingctx, arr):
+        """A view of ``arr`` without a reference-counted owner (``meminfo = NULL``).
+
+        numba increments and decrements the reference count of every array passed into a
+        compiled call (an atomic operation, ~5-10 ns each, and a contended cache line when
+        several threads share the array). Kernels here call the right-hand side 10^4-10^8 times
+        with the same arrays; passing borrowed views makes those updates no-ops
+        (``NRT_incref(NULL)`` returns at once): measured on the RHS of the torque-free case,
+        105 ns -> 30 ns per call. Safe only while the caller keeps the owner alive, i.e. inside
+        one kernel call on its own arguments; a borrowed view must never be returned or stored.
+        """
+        def codegen(context, builder, signature, args):
+            src = context.make_array(arr)(context, builder, value=args[0])
+            dst = context.make_array(arr)(context, builder)
+            dst.meminfo = cgutils.get_null_value(dst.meminfo.type)
+            dst.parent = cgutils.get_null_value(dst.parent.type)
+            for name in ("nitems", "itemsize", "data", "shape", "strides"):
+                setattr(dst, name, getattr(src, name))
+            return dst._getvalue()
+
+        return arr(arr), codegen
+
+    @intrinsic
+    def keepalive(typingctx, arr):
+        """A use of ``arr`` that generates no code: numba frees a local array right after its last
+        use, so an owner whose memory is used through :func:`borrow` views must be "used" again
+        where those views die (the end of the kernel)."""
+        def codegen(context, builder, signature, args):
+            return context.get_dummy_value()
+
+        return types.none(arr), codegen
 
 
 @jit_inline
@@ -112,14 +136,3 @@ def borrow_model(terms, params, table, work):
     """:func:`borrow` views of the model ``terms, params, table`` and the scratch ``work``
     (what every step loop hands on to the right-hand side)."""
     return borrow(terms), borrow(params), borrow(table), borrow(work)
-
-
-@intrinsic
-def keepalive(typingctx, arr):
-    """A use of ``arr`` that generates no code: numba frees a local array right after its last
-    use, so an owner whose memory is used through :func:`borrow` views must be "used" again
-    where those views die (the end of the kernel)."""
-    def codegen(context, builder, signature, args):
-        return context.get_dummy_value()
-
-    return types.none(arr), codegen

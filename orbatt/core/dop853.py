@@ -203,8 +203,10 @@ def hinit_norms(y, f, atol, aQ, rtol):
     dny = 0.0
     for i in range(y.shape[0]):
         sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
-        dnf += (f[i] / sk) ** 2
-        dny += (y[i] / sk) ** 2
+        a = f[i] / sk  # squares as products: the same bits compiled and interpreted
+        b = y[i] / sk
+        dnf += a * a
+        dny += b * b
     return dnf, dny
 
 
@@ -214,7 +216,8 @@ def hinit_der2(y, f0, f1, atol, aQ, rtol):
     der2 = 0.0
     for i in range(y.shape[0]):
         sk = (atol if i < 4 else aQ) + rtol * abs(y[i])
-        der2 += ((f1[i] - f0[i]) / sk) ** 2
+        d = (f1[i] - f0[i]) / sk
+        der2 += d * d
     return der2
 
 

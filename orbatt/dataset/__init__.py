@@ -56,8 +56,6 @@ coordinate of a problem with an epoch has the CF encoding ``units = "seconds sin
 """
 from __future__ import annotations
 
-import sys
-
 from ..epoch import iso_epoch
 from ..orbital import lvlh_angles
 from ..quaternion import to_euler321
@@ -88,44 +86,3 @@ def __getattr__(name):
 
         return OrbattAccessor
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-class _AccessorWithXarray:
-    """Registers the ``ds.orbatt`` accessor (:mod:`orbatt.dataset.accessor`) right after xarray
-    is imported, so that importing orbatt does not import xarray and pandas (~0.3 s; a run
-    written by ``orbatt run`` needs neither) and ``ds.orbatt`` is there on every Dataset all
-    the same, whoever imports xarray and when. A finder placed first in ``sys.meta_path``
-    until xarray's import: it lets the usual finders find xarray and runs the accessor's
-    module after xarray's own."""
-
-    def find_spec(self, name, path=None, target=None):
-        if name != "xarray":
-            return None
-        _remove_finder()
-        import importlib.util
-
-        spec = importlib.util.find_spec(name)
-        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
-            return spec
-        run = spec.loader.exec_module
-
-        def exec_module(module):
-            run(module)
-            _register_accessor()
-
-        spec.loader.exec_module = exec_module
-        return spec
-
-
-def _register_accessor():
-    from . import accessor  # noqa: F401  (registers ds.orbatt)
-
-
-def _remove_finder():
-    sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, _AccessorWithXarray)]
-
-
-if "xarray" in sys.modules:
-    _register_accessor()
-elif not any(isinstance(f, _AccessorWithXarray) for f in sys.meta_path):
-    sys.meta_path.insert(0, _AccessorWithXarray())

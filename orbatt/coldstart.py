@@ -1,0 +1,244 @@
+"""First runs on an empty compile cache: the kernels interpreted while they compile in the
+background.
+
+numba compiles orbatt's kernels on their first use and keeps the machine code in its disk
+cache; compiling the step loop and the kernels a run needs takes 15-30 s, ~100x what a small
+study then takes. So the first ``orbatt run`` of a kind of scenario (its method, potential,
+orbit provider, torques and control: :func:`kernel_key`) on a fresh install does not wait for
+the compiler:
+
+1. before numba is imported, ``orbatt run`` looks for this kind's **warm stamp**
+   (:func:`stamp_folder`): a file the background warm-up writes once the kernels are compiled
+   and cached for the current sources, orbatt, numba, Python and machine (:func:`fingerprint`);
+2. without one it sets ``NUMBA_DISABLE_JIT=1`` (the kernels run as plain Python: the same source,
+   the same IEEE arithmetic and libm calls, hence **the same bits**, tested on the shipped
+   scenarios; ~1000x slower per step) and starts the **warm-up**, a detached process that runs
+   the scenario compiled over its first outputs only, which fills numba's cache, and writes the
+   stamp (one warm-up per kind at a time: a lock file holds its pid);
+3. the interpreted run goes on until it is done or the stamp appears: then it stops and the same
+   command runs again, compiled, from the cache (:meth:`ColdStart.rerun_compiled`). A run that
+   fails in the interpreted kernels (an exception Python raises where compiled code gives inf or
+   NaN) also waits for the warm-up and runs again compiled, so errors are the compiled code's.
+
+Measured on the shipped ``paper-keplerian`` with an empty cache (2-core machine): 23.6 s
+compiled before, 1.8 s interpreted, the same file contents bit for bit
+(``benchmarks/run.py``'s first-run rows).
+
+``ORBATT_COLD_START=compile`` turns this off (wait for the compiler, as with the Python API,
+which always compiles); a process that has already imported numba is never switched.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+__all__ = ["ENV_MODE", "ColdStart", "plan", "kernel_key", "fingerprint", "stamp_folder", "warm_up"]
+
+#: the environment variable that turns interpreted first runs off (``compile``)
+ENV_MODE = "ORBATT_COLD_START"
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def stamp_folder() -> Path:
+    """Where the warm stamps and locks live: beside numba's cache of the kernels
+    (``$NUMBA_CACHE_DIR/orbatt``, else ``orbatt/core/__pycache__`` when it is writable, else
+    ``$XDG_CACHE_HOME/orbatt`` or ``~/.cache/orbatt``, numba's user-wide fallback)."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"]) / "orbatt"
+    in_tree = _PACKAGE / "core" / "__pycache__"
+    if os.access(in_tree if in_tree.is_dir() else in_tree.parent, os.W_OK):
+        return in_tree
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "orbatt"
+
+
+def fingerprint() -> dict:
+    """What numba's cache of the kernels depends on: the package's source files (path,
+    modification time, size: numba's own test), the versions of orbatt, numba and Python, and
+    the machine."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    h = hashlib.sha1()
+    for f in sorted(_PACKAGE.rglob("*.py")):
+        st = f.stat()
+        h.update(f"{f.relative_to(_PACKAGE)}:{st.st_mtime_ns}:{st.st_size};".encode())
+    try:
+        nb_version = version("numba")
+    except PackageNotFoundError:  # pragma: no cover - numba is a dependency
+        nb_version = "?"
+    from .version import __version__
+
+    return {"sources": h.hexdigest(), "orbatt": __version__, "numba": nb_version,
+            "python": sys.version, "machine": f"{platform.machine()} {platform.processor()}"}
+
+
+def _scenario_file(scenario) -> Path | None:
+    """The TOML file of ``scenario`` (a path, or a shipped scenario's name), or None."""
+    p = Path(scenario)
+    if p.is_file():
+        return p
+    try:
+        from importlib.resources import files
+
+        folder = Path(str(files("orbatt.scenarios")))
+    except (ModuleNotFoundError, TypeError):  # pragma: no cover - a source checkout not installed
+        folder = _PACKAGE.parent / "scenarios"
+    for f in (folder / f"{scenario}.toml", folder / f"{str(scenario).lower()}.toml"):
+        if f.is_file():
+            return f
+    return None
+
+
+def kernel_key(scenario, method=None) -> str | None:
+    """The kind of ``scenario`` as far as compiled kernels go: its method and the shape of its
+    model (potential kind, orbit provider, torque and control tables, wheels), read from the
+    TOML without validating it; None when the file cannot be read (the run then reports it)."""
+    import tomllib
+
+    f = _scenario_file(scenario)
+    if f is None:
+        return None
+    try:
+        doc = tomllib.loads(f.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+    integ = doc.get("integration") if isinstance(doc.get("integration"), dict) else {}
+    m = method or integ.get("method", "dop853")
+    shape = {"tables": sorted(k for k, v in doc.items() if isinstance(v, (dict, list))),
+             "potential": (doc.get("potential") or {}).get("kind") if isinstance(doc.get("potential"), dict) else None,
+             "orbit": (doc.get("orbit") or {}).get("provider") if isinstance(doc.get("orbit"), dict) else None,
+             "wheels": bool(isinstance(doc.get("body"), dict) and doc["body"].get("wheels"))}
+    digest = hashlib.sha1(json.dumps(shape, sort_keys=True, default=str).encode()).hexdigest()[:12]
+    return f"{''.join(c if c.isalnum() or c in '-_' else '_' for c in str(m))[:40]}-{digest}"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. no permission: it exists
+        return True
+    return True
+
+
+class ColdStart:
+    """The first run of one kind of scenario on an empty compile cache (:func:`plan` makes
+    one): the warm-up process, the progress wrapper that stops the interpreted run once the
+    warm-up is done, and the compiled rerun."""
+
+    def __init__(self, scenario, method, key, folder):
+        self.scenario, self.method, self.key, self.folder = scenario, method, key, Path(folder)
+        self.stamp = self.folder / f"warm-{key}.json"
+        self.lock = self.folder / f"warm-{key}.lock"
+        self.process = None
+        self.switched = False
+
+    def is_warm(self) -> bool:
+        """The warm stamp is there and matches :func:`fingerprint`."""
+        if not self.stamp.is_file():
+            return False
+        try:
+            return json.loads(self.stamp.read_text()) == fingerprint()
+        except (OSError, ValueError):
+            return False
+
+    def start_warm_up(self):
+        """Start the detached warm-up (:func:`warm_up`) unless one for this kind is running."""
+        try:
+            pid = int(self.lock.read_text())
+            if pid != os.getpid() and _alive(pid):
+                return
+        except (OSError, ValueError):
+            pass
+        env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
+        env[ENV_MODE] = "compile"
+        cmd = [sys.executable, "-m", "orbatt.coldstart", str(self.scenario), str(self.method or ""),
+               str(self.stamp)]
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            self.process = subprocess.Popen(cmd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                            stderr=subprocess.DEVNULL, start_new_session=True)
+            self.lock.write_text(str(self.process.pid))
+        except OSError:  # no warm-up: the next run compiles in its own process, as without this
+            self.process = None
+
+    def progress(self, inner):
+        """A progress callback for the interpreted run: ``inner`` (None or a callback), and
+        False (stop) once the warm-up's stamp is there."""
+        def report(info):
+            if self.is_warm():
+                self.switched = True
+                return False
+            return inner(info) if inner is not None else None
+
+        return report
+
+    def wait_for_warm_up(self, timeout=600.0):
+        """Wait until the warm-up process has ended (at most ``timeout`` seconds)."""
+        if self.process is not None:
+            try:
+                self.process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                pass
+
+    def rerun_compiled(self, argv) -> int:
+        """Run ``orbatt argv`` again in a new process with the compiled kernels (after the
+        warm-up has filled the cache); its exit code."""
+        self.wait_for_warm_up()
+        env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
+        env[ENV_MODE] = "compile"
+        return subprocess.call([sys.executable, "-m", "orbatt.cli", *argv], env=env)
+
+
+def plan(scenario, method=None) -> ColdStart | None:
+    """For ``orbatt run SCENARIO [--method METHOD]``: a :class:`ColdStart` when this kind of
+    scenario has no warm stamp (the caller must then set ``NUMBA_DISABLE_JIT=1`` before numba is
+    imported and start the warm-up), or None to run compiled (a warm cache, numba already
+    imported, ``ORBATT_COLD_START=compile``, or a file the run will refuse anyway)."""
+    if os.environ.get(ENV_MODE, "interpret").lower() == "compile" or "numba" in sys.modules:
+        return None
+    if os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"):
+        return None  # the user asked for interpreted kernels: nothing to warm up
+    key = kernel_key(scenario, method)
+    if key is None:
+        return None
+    cold = ColdStart(scenario, method, key, stamp_folder())
+    return None if cold.is_warm() else cold
+
+
+def warm_up(scenario, method, stamp) -> int:
+    """The warm-up process: run ``scenario`` compiled over its first outputs (which compiles
+    and caches every kernel a full run calls), then write the warm ``stamp``; 0 on success."""
+    try:
+        os.nice(10)  # behind the interpreted run it speeds up for
+    except (AttributeError, OSError):  # pragma: no cover - no nice() on this platform
+        pass
+    from .scenario import load_scenario
+
+    sc = load_scenario(scenario)
+    sc.times = sc.times[:min(3, sc.times.size)]
+    try:
+        sc.run_content(method=method or None)
+    except Exception:  # noqa: BLE001 - a failing run still compiled its kernels
+        pass
+    stamp = Path(stamp)
+    tmp = stamp.with_name(f".{stamp.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(fingerprint()))
+    os.replace(tmp, stamp)
+    try:
+        lock = stamp.with_suffix(".lock")
+        if lock.read_text().strip() == str(os.getpid()):
+            lock.unlink()
+    except OSError:
+        pass
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - the warm-up process (ColdStart.start_warm_up)
+    sys.exit(warm_up(sys.argv[1], sys.argv[2], sys.argv[3]))

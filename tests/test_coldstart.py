@@ -1,0 +1,124 @@
+"""First runs on an empty compile cache (orbatt.coldstart): the interpreted kernels give the
+compiled kernels' bits, the warm-up writes its stamp, and the pieces of the switch to the
+compiled run."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from orbatt import coldstart
+from orbatt.dataset import open_dataset
+
+#: shipped scenarios whose interpreted run takes a few seconds (the others are checked by hand:
+#: the closing note of the cold-start work lists them)
+INTERPRETED = ["paper-torque-free", "paper-keplerian", "paper-heavy-top"]
+
+
+def _env(**changes):
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_DISABLE_JIT", coldstart.ENV_MODE)}
+    env.update({k: v for k, v in changes.items() if v is not None})
+    return env
+
+
+def _same_values(a, b):
+    names = sorted(set(a.variables) | set(b.variables))
+    assert sorted(a.variables) == sorted(b.variables)
+    for v in names:
+        x, y = np.asarray(a[v].values), np.asarray(b[v].values)
+        assert x.dtype == y.dtype and x.shape == y.shape, v
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), f"{v} differs"
+
+
+def test_import_orbatt_is_light():
+    code = "import orbatt, sys; print(sorted(m for m in ('numba', 'numpy', 'astropy', 'xarray') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("name", INTERPRETED)
+def test_interpreted_kernels_give_the_compiled_bits(name, tmp_path, shipped_outputs):
+    out = tmp_path / f"{name}.nc"
+    r = subprocess.run(["orbatt", "run", name, "-o", str(out), "--quiet"], capture_output=True, text=True,
+                       env=_env(NUMBA_DISABLE_JIT="1"), timeout=300)
+    assert r.returncode == 0, r.stderr
+    with open_dataset(out) as a, open_dataset(shipped_outputs[name]) as b:
+        _same_values(a, b)
+
+
+def test_first_run_interprets_and_starts_the_warm_up(tmp_path, shipped_outputs):
+    cache = tmp_path / "numba-cache"
+    out = tmp_path / "tf.nc"
+    r = subprocess.run(["orbatt", "run", "paper-torque-free", "-o", str(out)], capture_output=True, text=True,
+                       env=_env(NUMBA_CACHE_DIR=str(cache)), timeout=300)
+    lock = next((cache / "orbatt").glob("warm-*.lock"), None)
+    try:
+        assert r.returncode == 0, r.stderr
+        assert "first run of this kind of scenario" in r.stderr
+        assert lock is not None, "no warm-up was started"
+        with open_dataset(out) as a, open_dataset(shipped_outputs["paper-torque-free"]) as b:
+            _same_values(a, b)
+    finally:  # the warm-up compiles into the temporary cache for a minute: stop it
+        if lock is not None:
+            try:
+                os.killpg(int(lock.read_text()), signal.SIGTERM)
+            except (OSError, ValueError):
+                pass
+
+
+def _plan(scenario, **env):
+    code = ("import sys; from orbatt import coldstart; c = coldstart.plan(sys.argv[1]); "
+            "print('none' if c is None else c.key)")
+    r = subprocess.run([sys.executable, "-c", code, scenario], capture_output=True, text=True, env=_env(**env),
+                       check=True)
+    return r.stdout.strip()
+
+
+def test_plan_interprets_only_a_cold_first_run(tmp_path):
+    cache = str(tmp_path / "cache")
+    key = _plan("paper-keplerian", NUMBA_CACHE_DIR=cache)
+    assert key == coldstart.kernel_key("paper-keplerian")
+    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache, ORBATT_COLD_START="compile") == "none"
+    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache, NUMBA_DISABLE_JIT="1") == "none"
+    assert _plan(str(tmp_path / "missing.toml"), NUMBA_CACHE_DIR=cache) == "none"  # the run reports it
+    stamp = tmp_path / "cache" / "orbatt" / f"warm-{key}.json"
+    stamp.parent.mkdir(parents=True)
+    stamp.write_text(json.dumps(coldstart.fingerprint()))
+    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache) == "none"
+    stamp.write_text(json.dumps({**coldstart.fingerprint(), "numba": "0.0"}))  # another numba: cold again
+    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache) == key
+
+
+def test_kernel_key_follows_the_model_not_the_numbers(tmp_path, shipped_outputs):
+    kep = coldstart.kernel_key("paper-keplerian")
+    assert kep == coldstart.kernel_key("paper-keplerian", "dop853")
+    assert kep != coldstart.kernel_key("paper-keplerian", "splitting4")
+    assert kep != coldstart.kernel_key("paper-torque-free")
+    text = (coldstart._scenario_file("paper-keplerian")).read_text()
+    other = tmp_path / "other.toml"
+    other.write_text(text.replace('"400 kg km2"', '"410 kg km2"'))
+    assert coldstart.kernel_key(other) == kep
+    assert coldstart.kernel_key(tmp_path / "nothing.toml") is None
+
+
+def test_warm_up_writes_the_stamp_and_the_run_switches(tmp_path):
+    cold = coldstart.ColdStart("paper-torque-free", None, coldstart.kernel_key("paper-torque-free"), tmp_path)
+    seen = []
+    report = cold.progress(seen.append)
+    assert report("info") is None and seen == ["info"] and not cold.is_warm()
+    assert coldstart.warm_up("paper-torque-free", "", cold.stamp) == 0
+    assert cold.is_warm() and json.loads(cold.stamp.read_text()) == coldstart.fingerprint()
+    assert report("info") is False and cold.switched and seen == ["info"]
+
+
+def test_rerun_compiled_runs_the_same_command(tmp_path, shipped_outputs):
+    cold = coldstart.ColdStart("paper-torque-free", None, "k", tmp_path)
+    out = tmp_path / "tf.nc"
+    assert cold.rerun_compiled(["run", "paper-torque-free", "-o", str(out), "--quiet"]) == 0
+    with open_dataset(out) as a, open_dataset(shipped_outputs["paper-torque-free"]) as b:
+        _same_values(a, b)
