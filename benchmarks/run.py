@@ -31,8 +31,10 @@ measured in the same run:
 Beside the ``dop853`` row of each case and target, the end-to-end row: ``load_scenario(path).run()``
 on a scenario file of the case at the same tolerance (parsing, building, the propagation and
 the xarray Dataset; ``end_to_end.py``). Then first runs in a fresh process: ``orbatt run`` of
-the shipped Keplerian scenario with an empty ``NUMBA_CACHE_DIR`` and warm, beside heyoka's first
-result in a fresh process (``--no-first-runs`` skips them: ~30 s of compilation).
+the shipped Keplerian scenario with an empty ``NUMBA_CACHE_DIR`` (interpreted kernels while a
+background warm-up compiles them), warm, and with an empty cache waiting for the compiler,
+beside heyoka's first result in a fresh process (``--no-first-runs`` skips them: ~1-2 minutes
+of compilation).
 
 Then ensemble throughput: DOP853 body-orbits per second at <= 1e-9 rad after one orbit, and
 splitting body-steps per second, for N = 1e3 and 1e5 members; and an ensemble of cubesats with
