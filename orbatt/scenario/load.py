@@ -2,6 +2,10 @@
 :func:`load_scenario` from a file or a shipped name, :func:`shipped_scenarios`."""
 from __future__ import annotations
 
+import copy
+import threading
+import warnings
+from collections import OrderedDict
 from pathlib import Path
 
 from .. import units as U
@@ -159,10 +163,48 @@ def load_scenario(path) -> Scenario:
         shipped = {name: f for name, _, f in shipped_scenarios()}
         key = p.name[:-5] if p.name.endswith(".toml") else p.name
         if key in shipped:
-            return Scenario(parse(read_scenario_text(shipped[key]), key), path=key)
+            return Scenario(parse_scenario_text(read_scenario_text(shipped[key]), key), path=key)
         raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
                             f"{', '.join(sorted(shipped))}")
-    return Scenario(parse(read_scenario_text(p), str(p)), path=p)
+    return Scenario(parse_scenario_text(read_scenario_text(p), str(p)), path=p)
+
+
+#: validated specs by ``(text, source)``, most recently used last (:func:`parse_scenario_text`)
+_SPECS: OrderedDict = OrderedDict()
+_SPECS_LOCK = threading.Lock()
+#: most specs kept
+SPEC_CACHE_SIZE = 32
+
+
+def parse_scenario_text(text: str, source: str) -> Spec:
+    """:func:`~orbatt.scenario.schema.parse` of ``text``, remembered by its content.
+
+    Validating a scenario (TOML parsing, unit strings) costs ~0.25 ms, as much as a short
+    run; loading the same file again (a study calling ``load_scenario(path).run()`` in a loop)
+    reuses the validated :class:`Spec` of the same ``text`` and ``source`` (the file's name,
+    which the error messages and the default ``name`` use). Every call returns its own deep
+    copy, so a caller changing its spec changes no other. Not remembered: a spec whose
+    validation warned (the warning is given again on every load) and a TLE orbit (its
+    ``tle_file`` is read from disk, which may change without the scenario changing).
+    """
+    key = (text, source)
+    with _SPECS_LOCK:
+        spec = _SPECS.get(key)
+        if spec is not None:
+            _SPECS.move_to_end(key)
+    if spec is None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            spec = parse(text, source)
+        for w in caught:  # given again outside, under the caller's filters
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+        if caught or (spec.orbit is not None and spec.orbit.get("provider") == "tle"):
+            return spec
+        with _SPECS_LOCK:
+            _SPECS[key] = spec
+            while len(_SPECS) > SPEC_CACHE_SIZE:
+                _SPECS.popitem(last=False)
+    return copy.deepcopy(spec)
 
 
 #: leading bytes of binary formats a user may pass for a scenario by mistake
