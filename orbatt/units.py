@@ -115,7 +115,7 @@ def strip(value, unit, name, *, allow_plain=False):
             out = np.asarray(value, dtype=np.float64)
         except (TypeError, ValueError):
             raise InputError(f"{name}: {value!r} is not a number or quantity") from None
-        if not (allow_plain or unit in (DIMENSIONLESS, u.rad)):
+        if not (allow_plain or unit is u.rad or unit is DIMENSIONLESS or unit in (DIMENSIONLESS, u.rad)):
             raise InputError(f"{name}: {value!r} has no unit; give a Quantity such as '{value} {unit.to_string()}'")
     if not np.isfinite(out).all():
         raise InputError(f"{name}: {value!r} is not finite; give finite values")
