@@ -109,7 +109,7 @@ class RigidBody:
         if not self.dimensionless:
             if isinstance(inertia, str):
                 inertia = u.Quantity(inertia)
-            if inertia.unit.physical_type != "moment of inertia":
+            if inertia.unit is not U.INERTIA and inertia.unit.physical_type != "moment of inertia":
                 raise InputError(f"inertia: {inertia} has the wrong dimension; expected mass x length^2, "
                                  f"e.g. [400, 500, 600] kg km^2")
         value = U.strip(inertia, U.INERTIA, "inertia", allow_plain=True)

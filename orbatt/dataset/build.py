@@ -24,6 +24,7 @@ from ..epoch import iso_epoch
 from ..errors import InputError
 from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
+from ..potentials import Potential
 from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from ..version import __version__
 from .content import Content, Var
@@ -267,11 +268,15 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     g, omega, T = cn.body_quantities(q, Q, inert_b)
     G = cn.space_momentum(q, Q)
     norm_err, qQ = cn.constraint_residuals(q, Q)
+    # U and the torque terms from one evaluation of the potential where it can give both
+    want_tau = bool(getattr(tr.potential, "term_names", None)) and not dimless
     if ens:
-        Upot = np.stack([_potential_energy(tr.potential, _member_body(body, inertia[e]), t, q[e])
-                         for e in range(q.shape[0])])
+        members = [_energy_and_torques(tr.potential, _member_body(body, inertia[e]), t, q[e], want_tau)
+                   for e in range(q.shape[0])]
+        Upot = np.stack([m[0] for m in members])
+        tau = np.stack([m[1] for m in members]) if want_tau else None
     else:
-        Upot = _potential_energy(tr.potential, body, t, q)
+        Upot, tau = _energy_and_torques(tr.potential, body, t, q, want_tau)
     phi, theta, psi = qt.to_euler313(q)
     e313 = np.stack([phi, theta, psi], axis=-1)
 
@@ -346,7 +351,7 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
                               body_axes="body axes 2, 3, 1 nominally along o2, o3, o1"),
         })
 
-    data.update(_torque_variables(tr.potential, body, inertia, t, q, tdims, ens))
+    data.update(_torque_variables(tr.potential, tau, t, tdims))
     extra = control_variables(tr, body, inertia, t, tdims, U)
     if "kinetic_energy" in extra:  # a gyrostat: its rate and energy replace the rigid body's
         extra["energy"] = _var(tdims, extra["kinetic_energy"].values + Upot, U["energy"], "total energy H = T + U")
@@ -369,16 +374,13 @@ _FIELD_VARIABLES = {
 }
 
 
-def _torque_variables(potential, body, inertia, t, q, tdims, ens):
+def _torque_variables(potential, tau, t, tdims):
     """``torque`` (the total) and ``torque_<term>`` of each torque term of ``potential``
-    (body axes, N m), and the environment fields it used along the orbit."""
-    names = list(getattr(potential, "term_names", []) or [])
-    if not names or body.dimensionless:
+    (body axes, N m) from its term torques ``tau`` (``(..., N, terms, 3)``, kg km^2 s^-2; None
+    for none), and the environment fields it used along the orbit."""
+    if tau is None:
         return {}
-    if ens:
-        tau = np.stack([potential.term_torques(_member_body(body, inertia[e]), t, q[e]) for e in range(q.shape[0])])
-    else:
-        tau = potential.term_torques(body, t, q)
+    names = list(potential.term_names)
     tau = tau * _TORQUE_TO_N_M
     vv = tdims + ("axis",)
     total = tau[..., 0, :].copy()
@@ -402,6 +404,14 @@ def _member_body(body, inertia):
     return RigidBody(inertia.tolist() if body.dimensionless else inertia * body.inertia_unit)
 
 
-def _potential_energy(potential, body, t, q):
-    U, _, _ = potential.evaluate(body, t, q)
-    return np.asarray(U, dtype=np.float64).reshape(t.shape)
+def _energy_and_torques(potential, body, t, q, want_tau):
+    """``(U (N,), tau)``: the potential energy at ``(t, q)`` and, if ``want_tau``, each torque
+    term (``(N, terms, 3)``, :meth:`~orbatt.potentials.Potential.term_torques`), else None. A
+    potential whose terms are its own torque (the base ``term_torques``) is evaluated once."""
+    if want_tau and getattr(type(potential), "term_torques", None) is Potential.term_torques:
+        U, _, torque = potential.evaluate(body, t, q)
+        tau = np.asarray(torque, dtype=np.float64)[:, None, :]
+    else:
+        U, _, _ = potential.evaluate(body, t, q)
+        tau = potential.term_torques(body, t, q) if want_tau else None
+    return np.asarray(U, dtype=np.float64).reshape(t.shape), tau

@@ -47,7 +47,9 @@ def build_kepler_orbit(ctx, o):
 
     plain = o.get("dimensionless", False)  # normalized units: a and gm as plain numbers
     lu, gu = (1.0, 1.0) if plain else (U.LENGTH, U.GM)
-    kw = {o["anomaly_kind"]: o["anomaly"] * U.ANGLE}
+    # angles as plain floats: KeplerOrbit takes a plain number as rad (the same value as a
+    # Quantity in rad, without making and stripping four Quantities)
+    kw = {o["anomaly_kind"]: float(o["anomaly"])}
     if o["central_body"] is None:
         kw["gm"] = o["gm"] * gu
     else:
@@ -55,8 +57,7 @@ def build_kepler_orbit(ctx, o):
     if o["epoch"] is not None:
         kw["epoch"] = o["epoch"]
     try:  # a periapsis inside the central body warns (PeriapsisWarning), as the paper's Sect. 6.2 orbit does
-        return KeplerOrbit(o["a"] * lu, o["e"], o["i"] * U.ANGLE, o["raan"] * U.ANGLE,
-                           o["argp"] * U.ANGLE, **kw)
+        return KeplerOrbit(o["a"] * lu, o["e"], float(o["i"]), float(o["raan"]), float(o["argp"]), **kw)
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
 

@@ -2,7 +2,14 @@
 :func:`load_scenario` from a file or a shipped name, :func:`shipped_scenarios`."""
 from __future__ import annotations
 
+import copy
+import dataclasses
+import threading
+import warnings
+from collections import OrderedDict
 from pathlib import Path
+
+import numpy as np
 
 from .. import units as U
 from ..body import RigidBody
@@ -159,10 +166,73 @@ def load_scenario(path) -> Scenario:
         shipped = {name: f for name, _, f in shipped_scenarios()}
         key = p.name[:-5] if p.name.endswith(".toml") else p.name
         if key in shipped:
-            return Scenario(parse(read_scenario_text(shipped[key]), key), path=key)
+            return Scenario(parse_scenario_text(read_scenario_text(shipped[key]), key), path=key)
         raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
                             f"{', '.join(sorted(shipped))}")
-    return Scenario(parse(read_scenario_text(p), str(p)), path=p)
+    return Scenario(parse_scenario_text(read_scenario_text(p), str(p)), path=p)
+
+
+#: validated specs by ``(text, source)``, most recently used last (:func:`parse_scenario_text`)
+_SPECS: OrderedDict = OrderedDict()
+_SPECS_LOCK = threading.Lock()
+#: most specs kept
+SPEC_CACHE_SIZE = 32
+
+
+def parse_scenario_text(text: str, source: str) -> Spec:
+    """:func:`~orbatt.scenario.schema.parse` of ``text``, remembered by its content.
+
+    Validating a scenario (TOML parsing, unit strings) costs ~0.25 ms, as much as a short
+    run; loading the same file again (a study calling ``load_scenario(path).run()`` in a loop)
+    reuses the validated :class:`Spec` of the same ``text`` and ``source`` (the file's name,
+    which the error messages and the default ``name`` use). Every call returns its own deep
+    copy, so a caller changing its spec changes no other. Not remembered: a spec whose
+    validation warned (the warning is given again on every load) and a TLE orbit (its
+    ``tle_file`` is read from disk, which may change without the scenario changing).
+    """
+    key = (text, source)
+    with _SPECS_LOCK:
+        spec = _SPECS.get(key)
+        if spec is not None:
+            _SPECS.move_to_end(key)
+    if spec is None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            spec = parse(text, source)
+        for w in caught:  # given again outside, under the caller's filters
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+        if caught or (spec.orbit is not None and spec.orbit.get("provider") == "tle"):
+            return spec
+        with _SPECS_LOCK:
+            _SPECS[key] = spec
+            while len(_SPECS) > SPEC_CACHE_SIZE:
+                _SPECS.popitem(last=False)
+    return _copy_spec(spec)
+
+
+_IMMUTABLE = (str, int, float, bool, type(None))
+
+
+def _fresh(x):
+    """A deep copy of ``x``: plain containers and arrays copied directly (a generic
+    ``copy.deepcopy`` of a spec costs ~4x more), anything else by ``copy.deepcopy``."""
+    if isinstance(x, _IMMUTABLE):
+        return x
+    t = type(x)
+    if t is dict:
+        return {k: _fresh(v) for k, v in x.items()}
+    if t is list:
+        return [_fresh(v) for v in x]
+    if t is tuple:
+        return tuple(_fresh(v) for v in x)
+    if t is np.ndarray and x.dtype.kind in "fiub":
+        return x.copy()
+    return copy.deepcopy(x)
+
+
+def _copy_spec(spec: Spec) -> Spec:
+    """A deep copy of ``spec`` (every field)."""
+    return dataclasses.replace(spec, **{f.name: _fresh(getattr(spec, f.name)) for f in dataclasses.fields(spec)})
 
 
 #: leading bytes of binary formats a user may pass for a scenario by mistake
