@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import analytic
+from ..core import free_body as fb
 from ..core import model as km
 from ..errors import InputError
 from .base import Method, register
@@ -60,7 +60,6 @@ class Exact(Method):
 
     name = "exact"
     closed_form = True
-    compiled = False
     description = ("closed-form torque-free rigid body (Jacobi elliptic functions, orbatt.analytic): no steps, "
                    "round-off accuracy; torque-free problems only")
 
@@ -68,7 +67,16 @@ class Exact(Method):
         check_torque_free(self.name, problem.terms)
         super().start(problem)
         p = problem
-        self.out = np.empty((p.members, p.t_out.shape[0], p.y0.shape[1]))
+        if not (np.abs(p.y0[:, :4]).sum(axis=1) > 0.0).all():
+            raise InputError("state0: the zero quaternion is not an attitude; give a unit quaternion q "
+                             "(scalar first)")
+        E = p.members
+        self.out = np.empty((E, p.t_out.shape[0], p.y0.shape[1]))
+        self.C = np.empty((E, fb.NC))
+        if E == 1:
+            fb.motion(p.inertia[0], p.y0[0], self.C[0])
+        else:
+            fb.motion_batch(p.inertia, p.y0, self.C)
         self.done = 0  # outputs evaluated (every member)
 
     def advance(self, budget):
@@ -76,11 +84,11 @@ class Exact(Method):
         p = self.p
         n = p.t_out.shape[0]
         stop = min(n, self.done + max(int(budget), 1))
-        dt = p.t_out[self.done:stop] - p.t0
-        for e in range(p.members):
-            q, Q = analytic.torque_free(p.inertia[e], p.y0[e, :4], p.y0[e, 4:8], dt)
-            self.out[e, self.done:stop, :4] = q
-            self.out[e, self.done:stop, 4:8] = Q
+        t = p.t_out[self.done:stop]
+        if p.members == 1:
+            fb.evaluate(self.C[0], p.y0[0], p.t0, t, self.out[0, self.done:stop])
+        else:
+            fb.evaluate_batch(self.C, p.y0, p.t0, t, self.out[:, self.done:stop])
         self.done = stop
         return stop == n
 
