@@ -67,16 +67,18 @@ class Exact(Method):
         check_torque_free(self.name, problem.terms)
         super().start(problem)
         p = problem
-        if not (np.abs(p.y0[:, :4]).sum(axis=1) > 0.0).all():
-            raise InputError("state0: the zero quaternion is not an attitude; give a unit quaternion q "
-                             "(scalar first)")
         E = p.members
         self.out = np.empty((E, p.t_out.shape[0], p.y0.shape[1]))
         self.C = np.empty((E, fb.NC))
         if E == 1:
             fb.motion(p.inertia[0], p.y0[0], self.C[0])
+            ok = self.C[0, fb.RHO2] > 0.0
         else:
             fb.motion_batch(p.inertia, p.y0, self.C)
+            ok = (self.C[:, fb.RHO2] > 0.0).all()
+        if not ok:  # (State refuses it; a hand-made Problem may not)
+            raise InputError("state0: the zero quaternion is not an attitude; give a unit quaternion q "
+                             "(scalar first)")
         self.done = 0  # outputs evaluated (every member)
 
     def advance(self, budget):

@@ -3,6 +3,9 @@ body against the integrators at tight tolerance, against the documented closed f
 orbatt.analytic, its invariants, ensembles, the scenario path, and its refusals."""
 from __future__ import annotations
 
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import astropy.units as u
@@ -232,3 +235,19 @@ def test_carlson_integrals_match_scipy():
         assert abs(cr.rj(x, y, z, p) / sp.elliprj(x, y, z, p) - 1) < 5e-15
     for e in (-0.9, -1e-3, -1e-4, 0.0, 1e-4, 1e-3, 5.0):
         assert abs(cr.rc1(e) / sp.elliprc(1.0, 1.0 + e) - 1) < 3e-16
+
+
+def test_toml_method_exact_from_the_cli(tmp_path):
+    """``[integration] method = "exact"`` in a file, and ``orbatt run --method exact``."""
+    text = (SCEN / "paper-torque-free.toml").read_text().replace('method = "dop853"', 'method = "exact"')
+    path = tmp_path / "free.toml"
+    path.write_text(text)
+    ds = orbatt.load_scenario(path).run()
+    assert ds.attrs["method"] == "exact" and ds.orbatt.stats["steps"] == 0
+    r = subprocess.run([sys.executable, "-m", "orbatt.cli", "run", str(SCEN / "paper-torque-free.toml"), "-o",
+                        str(tmp_path / "a.nc"), "--method", "exact", "--quiet"], capture_output=True, text=True,
+                       cwd=tempfile.gettempdir(), timeout=600)
+    assert r.returncode == 0, r.stderr
+    out = orbatt.open_dataset(tmp_path / "a.nc")
+    assert out.attrs["method"] == "exact"
+    np.testing.assert_allclose(out.q.values, ds.q.values, rtol=0, atol=1e-15)
