@@ -11,7 +11,7 @@ from pathlib import Path
 import astropy.units as u
 import numpy as np
 import pytest
-from method_cases import GG, P0_PAPER, Q0_PAPER, angle
+from method_cases import GG, Q0_PAPER, angle
 from scipy import special as sp
 
 import orbatt
