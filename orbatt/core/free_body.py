@@ -38,6 +38,11 @@ G0 = 45      # 3: the body momentum g0 (steady)
 AGM_SEQ = 48  # 3 * AGM_MAX: the AGM sequence of m1 (rows a, b, c)
 #: length of a motion row
 NC = AGM_SEQ + 3 * AGM_MAX
+#: the precession integral is evaluated from ``K`` backwards where ``dn^2 < min(sqrt(m1), FAR)``
+#: (:mod:`orbatt.analytic` switches at ``sqrt(m1)``; below ``dn^2 = FAR`` the forward form
+#: loses at most ``eps / sqrt(FAR)``, and for ``m1 > FAR`` the second ``sn, cn, dn`` and
+#: ``R_J`` of the backward form are never needed)
+FAR = 1e-2
 
 
 @jit_inline
@@ -59,7 +64,7 @@ def _z_reduced(c, ur, sn, cn, dn, seq, nagm):
     """The precession integral ``Z(u_r)``, ``|u_r| <= K`` (:func:`orbatt.analytic._z_reduced`)."""
     n, m, m1 = c[N], c[M], c[M1]
     sn3 = sn * sn * sn
-    if dn * dn < math.sqrt(m1):  # next to u_r = +-K: from K backwards
+    if dn * dn < min(math.sqrt(m1), FAR):  # next to u_r = +-K: from K backwards
         v = c[K] - abs(ur)
         s, cc, d = jacobi(v, m1, seq, nagm)
         c2, d2 = cc * cc, d * d
@@ -77,9 +82,24 @@ def _z_reduced(c, ur, sn, cn, dn, seq, nagm):
 
 
 @jit_inline
+def _half(y, x):
+    """``(cos(a/2), sin(a/2))`` of ``a = atan2(y, x)`` without the angle (well conditioned
+    for every direction: the half-angle formula on the side where it does not cancel)."""
+    r = math.hypot(x, y)
+    if r == 0.0:
+        return 1.0, 0.0
+    if x >= 0.0:
+        ch = math.sqrt(0.5 * (r + x) / r)
+        return ch, y / (2.0 * r * ch)
+    sh = math.copysign(math.sqrt(0.5 * (r - x) / r), y)
+    return y / (2.0 * r * sh), sh
+
+
+@jit_inline
 def _angles(c, t):
-    """Relabelled momentum ``g'`` and the 3-1-3 angles ``(phi, theta, psi)`` at ``t``
-    (:func:`orbatt.analytic._evaluate`)."""
+    """Relabelled momentum ``g'``, the precession angle ``phi`` and the half-angle cosines and
+    sines ``ct, st, cp, sp`` of the nutation ``theta`` and the spin ``psi`` at ``t``
+    (:func:`orbatt.analytic._evaluate`, which returns the angles themselves)."""
     u = c[LAM] * t + c[U0]
     a1, a2, a3 = c[A1], c[A2], c[A3]
     if c[KIND] == SEPARATRIX:
@@ -90,7 +110,7 @@ def _angles(c, t):
         if c[N] > 0.0:
             rn = math.sqrt(c[N])
             phi = phi + (c[C] * rn / (c[LAM] * (1.0 + c[N]))) * math.atan(rn * th)
-        psi = math.atan2(g1, g2)
+        cp, sp = _half(g1, g2)
     else:
         seq = c[AGM_SEQ:].reshape((3, AGM_MAX))
         nagm = int(c[AGM_N])
@@ -107,16 +127,25 @@ def _angles(c, t):
         phi = rate * t
         if coef != 0.0:
             phi = phi + coef * (k * (2.0 * c[ZK]) + _z_reduced(c, ur, sn, cn, dn, seq, nagm))
-        psi = math.atan2(a1 * abs(cn), a2 * sn) - math.pi * np.fmod(k, 4.0)
-    theta = math.atan2(math.hypot(g1, g2), g3)
-    return g1, g2, g3, phi, theta, psi
+        # psi = atan2(a1 |cn|, a2 sn) - pi k: its half angle turned by -pi k / 2 (k mod 4)
+        cp, sp = _half(a1 * abs(cn), a2 * sn)
+        j = np.fmod(k, 4.0)
+        if j < 0.0:
+            j += 4.0
+        if j == 1.0:
+            cp, sp = sp, -cp
+        elif j == 2.0:
+            cp, sp = -cp, -sp
+        elif j == 3.0:
+            cp, sp = -sp, cp
+    ct, st = _half(math.hypot(g1, g2), g3)
+    return g1, g2, g3, phi, ct, st, cp, sp
 
 
 @jit_inline
-def _euler(phi, theta, psi):
-    """``q_z(phi) (q_x(theta) q_z(psi))``, formed factor by factor (as :mod:`orbatt.analytic`)."""
-    ct, st = math.cos(0.5 * theta), math.sin(0.5 * theta)
-    cp, sp = math.cos(0.5 * psi), math.sin(0.5 * psi)
+def _euler(phi, ct, st, cp, sp):
+    """``q_z(phi) (q_x(theta) q_z(psi))`` from ``phi`` and the half-angle cosines and sines of
+    ``theta`` and ``psi``, formed factor by factor (as :mod:`orbatt.analytic`)."""
     h = 0.5 * phi
     return _qmul(math.cos(h), 0.0, 0.0, math.sin(h), ct * cp, st * cp, -st * sp, ct * sp)
 
@@ -241,8 +270,8 @@ def motion(inertia, y0, c):
         mu = (v[0], v[1], v[2], v[3])
     c[MU], c[MU + 1], c[MU + 2], c[MU + 3] = mu
     # q_G = qhat0 mu qe(0)~
-    _, _, _, phi0, theta0, psi0 = _angles(c, 0.0)
-    e0 = _euler(phi0, theta0, psi0)
+    _, _, _, phi0, ct0, st0, cp0, sp0 = _angles(c, 0.0)
+    e0 = _euler(phi0, ct0, st0, cp0, sp0)
     a = _qmul(c[QHAT0], c[QHAT0 + 1], c[QHAT0 + 2], c[QHAT0 + 3], mu[0], mu[1], mu[2], mu[3])
     qg = _qmul(a[0], a[1], a[2], a[3], e0[0], -e0[1], -e0[2], -e0[3])
     c[QG], c[QG + 1], c[QG + 2], c[QG + 3] = qg
@@ -258,8 +287,8 @@ def _state(c, t, out):
         qh = _qmul(c[QHAT0], c[QHAT0 + 1], c[QHAT0 + 2], c[QHAT0 + 3], math.cos(nv), sc * vx, sc * vy, sc * vz)
         gx, gy, gz = 2.0 * c[G0], 2.0 * c[G0 + 1], 2.0 * c[G0 + 2]
     else:
-        g1, g2, g3, phi, theta, psi = _angles(c, t)
-        e = _euler(phi, theta, psi)
+        g1, g2, g3, phi, ct, st, cp, sp = _angles(c, t)
+        e = _euler(phi, ct, st, cp, sp)
         a = _qmul(c[QG], c[QG + 1], c[QG + 2], c[QG + 3], e[0], e[1], e[2], e[3])
         qh = _qmul(a[0], a[1], a[2], a[3], c[MU], -c[MU + 1], -c[MU + 2], -c[MU + 3])
         # g = M^T g'
