@@ -5,11 +5,16 @@ for the method ``"exact"`` (:mod:`orbatt.methods.exact`).
 
 The formulas, the branches (steady rotation, the two elliptic regimes with the W or Y form of
 the precession integral, the separatrix) and their accuracy are those of
-:mod:`orbatt.analytic` (its module docstring), step for step; :mod:`orbatt.analytic` stays the
-documented reference and the test oracle, and the two agree to a few ``1e-16``
-(``tests/methods/test_exact_method.py``). This module only moves the work into compiled code:
-the constants of a member's motion once (:func:`motion`, into a row of ``NC`` floats), then
-one scalar evaluation per output time (:func:`evaluate`), a few hundred nanoseconds each.
+:mod:`orbatt.analytic` (its module docstring); :mod:`orbatt.analytic` stays the documented
+reference and the test oracle. Two changes of evaluation, not of formula: the attitude takes
+the half-angle cosines and sines of ``theta`` and ``psi`` straight from ``g'`` (no ``atan2``
+then ``sin``/``cos``), and the precession integral is evaluated from ``K`` backwards only
+where ``dn^2 < min(sqrt(m1), FAR)`` (:data:`FAR`). The two agree to round-off (a few
+``1e-15``, and ``eps |lambda t|`` in the phase: ``1e-14`` at ``t = 100``;
+``tests/methods/test_exact_method.py``). This module only moves the work into compiled code:
+the constants of a member's motion once (:func:`motion`, into a row of ``NC`` floats, about
+2 us), then one scalar evaluation per output time (:func:`evaluate`, 0.6-1 us; about twice
+that next to the separatrix, where the backward form is needed).
 
 Units: plain float64 in the body's consistent internal units (moments, momenta, time);
 ``y = (q, Q)`` scalar-first quaternions, ``q`` body -> inertial, ``Q = 2 q g`` (``DESIGN.md``).
