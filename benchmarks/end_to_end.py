@@ -59,19 +59,21 @@ def scenario_text(case, rtol, q0, p0, orbit=None):
     return "\n".join(lines) + "\n"
 
 
-def end_to_end_row(case, target, rtol, repeats, median_time, angle, q0, p0, orbit=None):
+def end_to_end_row(case, target, rtol, repeats, median_time, angle, q0, p0, orbit=None, method="dop853"):
     """The row ``(target, method, setting, error, work, time, integr.)`` of
-    ``load_scenario(path).run()`` at ``rtol = atol``."""
+    ``load_scenario(path).run()`` at ``rtol = atol`` (with ``method``, e.g. ``"exact"``, for the
+    file's ``[integration] method``)."""
     folder = tempfile.mkdtemp(prefix="orbatt-bench-")
     path = Path(folder) / "case.toml"
     path.write_text(scenario_text(case, rtol, q0, p0, orbit))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        orbatt.load_scenario(path).run()  # compiled kernels loaded
-        tm, ds = median_time(lambda: orbatt.load_scenario(path).run(), repeats)
+        orbatt.load_scenario(path).run(method)  # compiled kernels loaded
+        tm, ds = median_time(lambda: orbatt.load_scenario(path).run(method), repeats)
     stats = ds.orbatt.stats
     err = angle(ds["q"].values[-1], case.qref)
-    return (target, "dop853, load_scenario().run()", f"rtol=atol {rtol:.1e}", err,
+    setting = "closed form" if method == "exact" else f"rtol=atol {rtol:.1e}"
+    return (target, f"{method}, load_scenario().run()", setting, err,
             f"{stats['steps']} st / {stats['rhs_evaluations']} f", tm, stats["wall_time_s"])
 
 

@@ -490,6 +490,13 @@ def work_precision(case, args, heyoka_available):
                 orbit = (GM, A, ECC, INC, RAAN, ARGP) if case.kind == 2 else None
                 rows.append(end_to_end.end_to_end_row(case, target, rtol, repeats, median_time, angle, Q0, P0,
                                                       orbit))
+        if case.kind == 0:  # the closed form (method "exact"): nothing to tune, the same call at every target
+            tm, tr = median_time(lambda: orbatt.propagate(case.body, case.state, case.potential, [0.0, case.T],
+                                                          method="exact"), repeats)
+            rows.append((target, "exact", "closed form", angle(tr.q[-1], case.qref), "0 st / 0 f", tm,
+                         tr.stats["wall_time_s"]))
+            rows.append(end_to_end.end_to_end_row(case, target, 1e-10, repeats, median_time, angle, Q0, P0,
+                                                  method="exact"))  # (the file's rtol, unused)
         for method, order, n0 in fixed:
             if method == "splitting2" and target < 1e-7 and not args.full:
                 # ~2.5e7 steps (5 s per run): estimated from the 1e-6 row, not run
@@ -735,7 +742,7 @@ def main(argv=None):
     t_start = time.time()
     # warm up the compiled kernels (first call compiles or loads the cache)
     free = free_case()
-    for m, kw in (("dop853", {}), ("splitting2", {"step": 1.0}), ("rk4", {"step": 1.0})):
+    for m, kw in (("dop853", {}), ("exact", {}), ("splitting2", {"step": 1.0}), ("rk4", {"step": 1.0})):
         orbatt.propagate(free.body, free.state, free.potential, [0.0, 1.0], method=m, **kw)
     kep = kepler_case()
     for case in (kep, free):

@@ -32,6 +32,12 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
 ``"scipy-DOP853"``, ``"scipy-RK45"``, ``"scipy-RK23"``, ``"scipy-Radau"``, ``"scipy-BDF"``, ``"scipy-LSODA"`` (:mod:`.scipy_ivp`)
     The reference path: scipy's solvers (Python step loop) on the compiled right-hand side,
     restarted at every output time so that outputs are step-end values too.
+``"exact"`` (:mod:`.exact`)
+    The torque-free rigid body in closed form (Jacobi elliptic functions,
+    :mod:`orbatt.analytic`), evaluated at the output times: no steps, round-off accuracy
+    at any time span. Torque-free problems only (``orbatt.TorqueFree()``, no torques, control
+    or wheels; others are refused); ensembles supported. ``rtol``/``atol`` are checked but
+    unused; ``step`` is not needed (in ``t_span`` mode it sets the output grid).
 
 Writing a method: see :class:`Method` (the subclass contract) and :func:`register`.
 """
@@ -39,9 +45,10 @@ from __future__ import annotations
 
 from .base import METHODS, Method, methods, register, resolve_method
 from .dop853 import DOP853, DOP853Lanes
+from .exact import Exact
 from .fixed_step import RK4, FixedStep, Splitting
 from .problem import KernelSpec, Problem
 from .scipy_ivp import Scipy
 
 __all__ = ["Method", "METHODS", "methods", "register", "resolve_method", "Problem", "KernelSpec", "DOP853",
-           "DOP853Lanes", "FixedStep", "RK4", "Splitting", "Scipy"]
+           "DOP853Lanes", "Exact", "FixedStep", "RK4", "Splitting", "Scipy"]

@@ -38,8 +38,10 @@ def register(cls):
 
 def methods() -> dict:
     """``{name: description}`` of the registered methods (aliases included)."""
-    return {k: f"{c.description} (order {c.order}, {'adaptive' if c.adaptive else 'fixed step'}"
-               f"{', symplectic' if c.symplectic else ''}{', compiled' if c.compiled else ''})"
+    return {k: f"{c.description} ("
+               + ("closed form" if c.closed_form else
+                  f"order {c.order}, {'adaptive' if c.adaptive else 'fixed step'}")
+               + f"{', symplectic' if c.symplectic else ''}{', compiled' if c.compiled else ''})"
             for k, c in METHODS.items()}
 
 
@@ -101,7 +103,11 @@ class Method:
     aliases : tuple of str
         Other registry names.
     order : int
-        Order of convergence.
+        Order of convergence (0 for a closed-form solution).
+    closed_form : bool
+        Evaluates the exact solution at the output times instead of stepping (``"exact"``):
+        no ``step`` needed; ``rtol``, ``atol``, ``step`` and ``max_steps`` are checked but
+        do not change the result.
     adaptive : bool
         Step size chosen from ``rtol``/``atol`` (True) or fixed ``step`` (False).
     symplectic : bool
@@ -133,6 +139,7 @@ class Method:
     name = ""
     aliases: tuple = ()
     order = 0
+    closed_form = False
     adaptive = False
     symplectic = False
     compiled = True
@@ -154,6 +161,8 @@ class Method:
 
     def settings(self) -> dict:
         """The settings recorded with the result (``Trajectory.settings``)."""
+        if self.closed_form:
+            return {"closed_form": True, **self.opts}
         s = {"order": self.order, "max_steps": self.max_steps}
         if self.adaptive:
             s.update(rtol=self.rtol, atol=self.atol)

@@ -273,7 +273,7 @@ def method_settings(cls, rtol, atol, step, max_steps, body):
     stepv = None
     if step is not None:
         stepv = _positive(step, "step", body, unit=body.time_unit)
-    elif not cls.adaptive:
+    elif not cls.adaptive and not cls.closed_form:
         raise InputError(f"step: method {cls.name!r} has a fixed step; give step= (e.g. a few seconds for an "
                          "orbiting body, 1e-2 of a rotation period in general)")
     if max_steps is None:
@@ -287,10 +287,13 @@ def output_times(cls, t0, t_end, tv, step, max_steps, ensemble):
     """``(t_out, step_ends)``: the output times the method gets. Without output times
     ``tv`` (``t_span`` mode), adaptive methods record every step end (``t_out = [t0, t_end]``,
     ``step_ends`` True; not for ensembles) and fixed-step methods output the grid
-    ``t0 + k step`` and ``t_end``. Fixed-step methods must reach the end in ``max_steps``."""
+    ``t0 + k step`` and ``t_end``. Fixed-step methods must reach the end in ``max_steps``.
+    Closed-form methods output ``[t0, t_end]``, or the grid of ``step`` where one is given."""
     step_ends = False
     if tv is None:
-        if cls.adaptive:
+        if cls.closed_form and step is None:
+            t_out = np.array([t0, t_end])
+        elif cls.adaptive:
             if ensemble:
                 raise InputError("t_span: an ensemble has no common step grid; give output times t (e.g. "
                                  "t=[t0, t_end])")
@@ -306,7 +309,7 @@ def output_times(cls, t0, t_end, tv, step, max_steps, ensemble):
             t_out = np.concatenate([grid, [t_end]])
     else:
         t_out = tv
-    if not cls.adaptive:
+    if not cls.adaptive and not cls.closed_form:
         n_needed = math.ceil((float(t_out[-1]) - t0) / step - 1e-9)
         if n_needed > max_steps:
             raise InputError(f"step: {step!r} needs {n_needed} steps to reach {float(t_out[-1])!r}, more than "
