@@ -51,6 +51,17 @@ def test_interpreted_kernels_give_the_compiled_bits(name, tmp_path, shipped_outp
         _same_values(a, b)
 
 
+def test_interpreted_closed_form_gives_the_compiled_bits(tmp_path):
+    outs = {}
+    for mode, env in (("interpreted", _env(NUMBA_DISABLE_JIT="1")), ("compiled", _env(ORBATT_COLD_START="compile"))):
+        outs[mode] = tmp_path / f"{mode}.nc"
+        r = subprocess.run(["orbatt", "run", "paper-torque-free", "--method", "exact", "-o", str(outs[mode]),
+                            "--quiet"], capture_output=True, text=True, env=env, timeout=300)
+        assert r.returncode == 0, r.stderr
+    with open_dataset(outs["interpreted"]) as a, open_dataset(outs["compiled"]) as b:
+        _same_values(a, b)
+
+
 def test_first_run_interprets_and_starts_the_warm_up(tmp_path, shipped_outputs):
     cache = tmp_path / "numba-cache"
     out = tmp_path / "tf.nc"

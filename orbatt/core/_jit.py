@@ -85,7 +85,10 @@ BAD_LANE_SHIFT = 8     #: lockstep groups: ``(flags >> BAD_LANE_SHIFT) - 1`` is 
 
 #: the kernels run as plain Python (``NUMBA_DISABLE_JIT=1``, set by :mod:`orbatt.coldstart`
 #: for a first run on an empty compile cache): the same source, the same IEEE arithmetic and
-#: libm calls, so the same bits (tested on the shipped scenarios), ~1000x slower per step
+#: libm calls, so the same bits (tested on the shipped scenarios), ~1000x slower per step.
+#: Kernels keep that true by writing integer powers as products (numba multiplies, Python
+#: calls pow) and by not calling ``math.hypot`` (CPython has its own, which differs from
+#: numba's in the last bit for ~1 % of arguments)
 INTERPRETED = bool(nb.config.DISABLE_JIT)
 
 if INTERPRETED:

@@ -90,7 +90,7 @@ def _z_reduced(c, ur, sn, cn, dn, seq, nagm):
 def _half(y, x):
     """``(cos(a/2), sin(a/2))`` of ``a = atan2(y, x)`` without the angle (well conditioned
     for every direction: the half-angle formula on the side where it does not cancel)."""
-    r = math.hypot(x, y)
+    r = math.sqrt(x * x + y * y)
     if r == 0.0:
         return 1.0, 0.0
     if x >= 0.0:
@@ -143,7 +143,7 @@ def _angles(c, t):
             cp, sp = -cp, -sp
         elif j == 3.0:
             cp, sp = -sp, cp
-    ct, st = _half(math.hypot(g1, g2), g3)
+    ct, st = _half(math.sqrt(g1 * g1 + g2 * g2), g3)
     return g1, g2, g3, phi, ct, st, cp, sp
 
 
@@ -239,7 +239,7 @@ def motion(inertia, y0, c):
         c[KIND] = ELLIPTIC
         c[S1] = 1.0
         x, y = h[0], h[1] * math.sqrt(r12)
-        rr = math.hypot(x, y)
+        rr = math.sqrt(x * x + y * y)
         cs, sn = x / rr, y / rr
         Kv = rf(0.0, m1, 1.0)
         F = sn * rf(cs * cs, m1 + m * cs * cs, 1.0)
