@@ -207,7 +207,7 @@ def _motion(I, g0):
     # s = (G^2 - 2 T I_mid) / |G|^2, as a sum of one-signed terms per axis
     s = e[imax] ** 2 * ((Imax - Imid) / Imax) - e[imin] ** 2 * ((Imid - Imin) / Imin)
     perm = (imin, imid, imax) if s >= 0.0 else (imax, imid, imin)  # (1', 2', 3')
-    parity = _parity(perm)
+    parity = float(round(np.linalg.det(np.eye(3)[list(perm)])))  # +-1: the permutation's parity
     eps3 = 1.0 if e[perm[2]] >= 0.0 else -1.0
     signs = np.array([1.0, parity * eps3, eps3])
     M = np.zeros((3, 3))
@@ -316,17 +316,6 @@ def jacobi(u, m1):
         phi = 0.5 * (phi + beta)
     sn, cn = np.sin(phi), np.cos(phi)
     return sn, cn, np.sqrt(m1 + (1.0 - m1) * cn * cn)
-
-
-def _parity(perm):
-    p = list(perm)
-    sign = 1.0
-    for i in range(3):
-        while p[i] != i:
-            j = p[i]
-            p[i], p[j] = p[j], p[i]
-            sign = -sign
-    return sign
 
 
 def _sech(u):

@@ -29,7 +29,7 @@ from numba import prange
 from ._jit import jit, jit_inline, jit_parallel
 from .carlson import AGM_MAX, agm, jacobi, rf, rj
 
-__all__ = ["NC", "STEADY", "ELLIPTIC", "SEPARATRIX", "motion", "evaluate", "evaluate_batch", "motion_batch"]
+__all__ = ["permutation_parity", "NC", "STEADY", "ELLIPTIC", "SEPARATRIX", "motion", "evaluate", "evaluate_batch", "motion_batch"]
 
 STEADY, ELLIPTIC, SEPARATRIX = 0, 1, 2
 # slots of a motion row
@@ -84,6 +84,20 @@ def _z_reduced(c, ur, sn, cn, dn, seq, nagm):
         return ((m / (3.0 * n)) * sn3 * rj(cn * cn, dn * dn, 1.0, 1.0 + (m / n) * sn * sn)
                 + math.atan2(P * sn, cn * dn) / P)
     return (sn3 / 3.0) * rj(cn * cn, dn * dn, 1.0, 1.0 + n * sn * sn)
+
+
+@jit_inline
+def permutation_parity(perm):
+    """``+1.0`` or ``-1.0``: the parity of the permutation ``perm`` of ``0 .. n-1`` (an int
+    array, not changed), by counting the swaps that sort it."""
+    p = perm.copy()
+    sign = 1.0
+    for i in range(p.shape[0]):
+        while p[i] != i:
+            j = p[i]
+            p[i], p[j] = p[j], p[i]
+            sign = -sign
+    return sign
 
 
 @jit_inline
@@ -193,16 +207,9 @@ def motion(inertia, y0, c):
     order = np.argsort(I, kind="mergesort")
     imin, imid, imax = order[0], order[1], order[2]
     Imin, Imid, Imax = I[imin], I[imid], I[imax]
-    s = e[imax] ** 2 * ((Imax - Imid) / Imax) - e[imin] ** 2 * ((Imid - Imin) / Imin)
+    s = (e[imax] * e[imax]) * ((Imax - Imid) / Imax) - (e[imin] * e[imin]) * ((Imid - Imin) / Imin)
     perm = np.array([imin, imid, imax]) if s >= 0.0 else np.array([imax, imid, imin])
-    # parity of the permutation
-    p = perm.copy()
-    parity = 1.0
-    for i in range(3):
-        while p[i] != i:
-            j = p[i]
-            p[i], p[j] = p[j], p[i]
-            parity = -parity
+    parity = permutation_parity(perm)
     eps3 = 1.0 if e[perm[2]] >= 0.0 else -1.0
     signs = np.array([1.0, parity * eps3, eps3])
     Mx = np.zeros((3, 3))
@@ -212,11 +219,11 @@ def motion(inertia, y0, c):
     h = Mx @ e
     r12 = (J1 / J2) * ((J3 - J2) / (J3 - J1))
     r32 = (J3 / J2) * ((J2 - J1) / (J3 - J1))
-    a1 = math.sqrt(h[0] ** 2 + r12 * h[1] ** 2)
-    a3 = math.sqrt(h[2] ** 2 + r32 * h[1] ** 2)
+    a1 = math.sqrt((h[0] * h[0]) + r12 * (h[1] * h[1]))
+    a3 = math.sqrt((h[2] * h[2]) + r32 * (h[1] * h[1]))
     a2 = a1 / math.sqrt(r12)
     n = (J3 / J1) * ((J2 - J1) / (J3 - J2))
-    m1 = min(max(s * (J3 / (J3 - J2)) / a3 ** 2, 0.0), 1.0)
+    m1 = min(max(s * (J3 / (J3 - J2)) / (a3 * a3), 0.0), 1.0)
     m = 1.0 - m1
     lam = gabs * a3 * math.sqrt(((J3 - J2) / J1) * ((J3 - J1) / J2)) / J3
     sigma = 1.0 if J3 > J1 else -1.0
@@ -230,7 +237,7 @@ def motion(inertia, y0, c):
     if m1 == 0.0:
         c[KIND] = SEPARATRIX
         s1 = 1.0 if h[0] >= 0.0 else -1.0
-        sech0 = math.sqrt((h[0] ** 2 + h[2] ** 2) / (a1 ** 2 + a3 ** 2))
+        sech0 = math.sqrt(((h[0] * h[0]) + (h[2] * h[2])) / ((a1 * a1) + (a3 * a3)))
         c[S1] = s1
         c[U0] = math.asinh((h[1] / a2) / sech0)
         c[LAM] = sigma * s1 * lam
