@@ -29,6 +29,7 @@ import time
 
 import numpy as np
 
+from .core import INTERPRETED
 from .errors import InputError, IntegrationError
 from .methods import METHODS, Method, methods, register
 from .methods.base import resolve_method
@@ -154,6 +155,8 @@ def _run_chunks(m: Method, problem: Problem, progress, result) -> Trajectory:
     budget = max(16, 200_000 // E) if E > 1 else 5_000
     if not m.compiled:
         budget = 2_000
+    if INTERPRETED:  # kernels running as Python (orbatt.coldstart): ~1000x slower per step
+        budget = 20
     start = time.perf_counter()
 
     def finish(complete, reason):

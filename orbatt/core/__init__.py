@@ -32,3 +32,8 @@ equation  what                                                function
 (20)      gravity gradient (MacCullagh) potential             :func:`.potentials.gravity_gradient`
 ========  ==================================================  ==========================================
 """
+from __future__ import annotations
+
+from ._jit import INTERPRETED
+
+__all__ = ["INTERPRETED"]
