@@ -8,7 +8,8 @@ fixed component axes), so :func:`assemble` only computes the dimension sizes, ma
 default pandas index of each dimension coordinate and hands everything to xarray's direct
 constructor. The result is identical to ``xr.Dataset(data_vars, coords=coords, attrs=attrs)``
 (same variables in the same order, indexes, attributes, dtypes; tested), in a fraction of
-the time (measured: 560 -> 140 us for a run's Dataset). Where xarray lacks the direct
+the time (measured: 560 -> 140 us for a run's Dataset; 75 us with the variables made without
+xarray's constructors, checked at import against them). Where xarray lacks the direct
 constructor, :func:`assemble` falls back to the public one.
 """
 from __future__ import annotations
