@@ -93,7 +93,10 @@ def dot(a, b):
 
 def norm(q):
     """Euclidean norm ``|q|``; shape ``(...)``."""
-    return np.linalg.norm(np.asarray(q, dtype=np.float64), axis=-1)
+    q = np.asarray(q, dtype=np.float64)
+    # what np.linalg.norm(q, axis=-1) computes (the same sum, in the same order) without its
+    # argument handling
+    return np.sqrt(np.add.reduce(q * q, axis=-1))
 
 
 def normalize(q):
@@ -310,19 +313,33 @@ def to_euler313(q):
     (resp. ``phi - psi``) is defined: ``psi = 0`` is returned there, never NaN.
     """
     q = normalize(q)
-    q0, q1, q2, q3 = np.moveaxis(q, -1, 0)
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     a = np.hypot(q0, q3)
     b = np.hypot(q1, q2)
     theta = 2.0 * np.arctan2(b, a)
     sp = np.arctan2(q3, q0)
     sm = np.arctan2(q2, q1)
-    sp = np.where(a == 0.0, 0.0, sp)
-    sm = np.where(b == 0.0, 0.0, sm)
-    # at theta = pi (a = 0), phi - psi = 2 sm alone is defined; psi := 0
-    phi = np.where(a == 0.0, 2.0 * sm, np.where(b == 0.0, 2.0 * sp, sp + sm))
-    psi = np.where((a == 0.0) | (b == 0.0), 0.0, sp - sm)
-    wrap = lambda x: np.angle(np.exp(1j * x))  # noqa: E731  (-pi, pi]
-    return wrap(phi), theta, wrap(psi)
+    za = a == 0.0
+    zb = b == 0.0
+    # phi and psi side by side: one wrap for both (elementwise, the same values)
+    both = np.empty((2,) + sp.shape)
+    if za.any() or zb.any():
+        sp = np.where(za, 0.0, sp)
+        sm = np.where(zb, 0.0, sm)
+        # at theta = pi (a = 0), phi - psi = 2 sm alone is defined; psi := 0
+        both[0] = np.where(za, 2.0 * sm, np.where(zb, 2.0 * sp, sp + sm))
+        both[1] = np.where(za | zb, 0.0, sp - sm)
+    else:  # the generic case: what the np.where above select
+        np.add(sp, sm, out=both[0, ...])
+        np.subtract(sp, sm, out=both[1, ...])
+    wrapped = _wrap(both)
+    return wrapped[0], theta, wrapped[1]
+
+
+def _wrap(x):
+    """``x`` wrapped to ``(-pi, pi]``: the argument of ``exp(i x)`` (``np.angle``)."""
+    z = np.exp(1j * x)
+    return np.arctan2(z.imag, z.real)
 
 
 def to_euler321(q):
@@ -348,19 +365,26 @@ def to_euler321(q):
         (when ``cos(pitch) < sqrt(eps)``), never NaN.
     """
     q = normalize(q)
-    w, x, y, z = np.moveaxis(q, -1, 0)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)
     r22 = 1.0 - 2.0 * (x * x + y * y)  # cos(roll) cos(pitch)
     r20 = 2.0 * (w * y - x * z)  # sin(pitch)
     cp = np.hypot(r21, r22)
     pitch = np.arctan2(r20, cp)
-    lock = cp < np.sqrt(np.finfo(np.float64).eps)
-    roll = np.where(lock, 0.0, np.arctan2(r21, r22))
+    lock = cp < _SQRT_EPS
+    roll = np.arctan2(r21, r22)
     yaw_generic = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    if not lock.any():  # no gimbal lock: what the np.where below select (arrays, as there)
+        return np.asarray(roll), pitch, np.asarray(yaw_generic)
+    roll = np.where(lock, 0.0, roll)
     # with roll = 0: R = Rz(yaw) Ry(pitch), R01 = -sin(yaw), R11 = cos(yaw)
     yaw_lock = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
     yaw = np.where(lock, yaw_lock, yaw_generic)
     return roll, pitch, yaw
+
+
+#: the gimbal-lock threshold of :func:`to_euler321` on ``cos(pitch)``
+_SQRT_EPS = float(np.sqrt(np.finfo(np.float64).eps))
 
 
 def to_scipy(q):

@@ -214,3 +214,18 @@ def test_euler321_still_reachable_from_dataset():
     from orbatt import dataset as D
 
     assert D.to_euler321 is qt.to_euler321
+
+
+def test_euler_angles_of_a_row_do_not_depend_on_singular_rows_beside_it():
+    """The generic rows come out bitwise the same whether or not a singular row (theta = 0 or
+    pi; gimbal lock) in the same array takes the singular branch."""
+    q = qt.normalize(np.random.default_rng(6).normal(size=(9, 4)))
+    cases = [(qt.to_euler313, [qt.from_euler313(0.3, 0.0, 0.2), qt.from_euler313(0.3, np.pi, 0.2)]),
+             (qt.to_euler321, [qt.from_scipy(Rotation.from_euler("ZYX", [0.7, p, 0.2])) for p in (np.pi / 2, -np.pi / 2)])]
+    for f, singular in cases:
+        alone = f(q)
+        for s in singular:
+            mixed = f(np.vstack([q, s]))
+            for a, m in zip(alone, mixed):
+                assert np.array_equal(a.view(np.int64), m[:-1].view(np.int64))
+            assert np.isfinite(np.array(mixed)).all()

@@ -62,3 +62,34 @@ def test_a_run_imports_no_dask():
             "print(sorted(m for m in ('dask', 'pint', 'sparse', 'distributed') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize("direct", [True, False])
+def test_variables_made_without_xarrays_constructor_are_its_variables(orbit_ds, monkeypatch, direct):
+    """The direct variables and index-variable copies (checked at import) give the Dataset of
+    the public constructor, and so does the fallback through xarray's constructors."""
+    assert assembly._DIRECT  # this xarray passes the import check
+    monkeypatch.setattr(assembly, "_DIRECT", direct)
+    for _ in range(2):  # the second time from the cached indexes (time included: 2 outputs)
+        ds = assembly.assemble(*_parts(orbit_ds))
+        assert ds.identical(assembly.assemble(*_parts(orbit_ds), direct=False))
+        for name, var in ds.variables.items():
+            assert var.encoding == orbit_ds.variables[name].encoding
+            assert var.attrs is not orbit_ds.variables[name].attrs
+
+
+def test_cached_time_indexes_are_shared_read_only_and_per_values():
+    """A small float ``time`` coordinate's index is reused by the next Dataset with the same
+    times: pandas holds its own read-only copy, so changing the caller's array changes
+    neither Dataset."""
+    t = np.array([0.0, 1.5])
+    make = lambda: assembly.assemble({"x": assembly.variable(("time",), np.arange(2.0), {})},  # noqa: E731
+                                     {"time": assembly.variable(("time",), t, {"units": "s"})}, {})
+    a, b = make(), make()
+    t[0] = 7.0
+    for ds in (a, b):
+        assert list(ds["time"].values) == [0.0, 1.5] and not ds["time"].values.flags.writeable
+    c = make()
+    assert list(c["time"].values) == [7.0, 1.5] and list(a["time"].values) == [0.0, 1.5]
+    a["time"].attrs["units"] = "h"
+    assert b["time"].attrs["units"] == "s"
