@@ -723,7 +723,8 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--no-ensembles", action="store_true")
     ap.add_argument("--no-first-runs", action="store_true",
-                    help="skip the fresh-process rows (orbatt run with an empty numba cache: ~30 s of compilation)")
+                    help="skip the fresh-process rows (orbatt run with an empty numba cache, its background warm-up, "
+                         "and a first run waiting for the compiler: 1-2 minutes)")
     args = ap.parse_args(argv)
     if args.quick:
         args.repeats = 3
