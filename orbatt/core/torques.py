@@ -34,28 +34,43 @@ def gradient_of_torque(q, tau):
 
 
 @jit_inline
-def add_lever_torque(tx, ty, tz, params, b, F):
-    """``(tx, ty, tz) + r x F``: the torque of the force ``F`` (body axes) at the centre of
-    pressure ``r = params[b + 4 : b + 7]`` of the facet at ``params[b]``, added to a sum."""
-    t = cross((params[b + 4], params[b + 5], params[b + 6]), F)
-    return tx + t[0], ty + t[1], tz + t[2]
+def facet_force(srp, a, cos, u, params, b):
+    """The force (body axes) on the facet at ``params[b]`` lit at ``cos = n.u > 0`` from the
+    unit direction ``u`` (body axes), ``a = -(scale) params[b] cos``: drag (``srp`` False)
+    ``a u``; SRP ``a [(1 - C_s) u + 2 (C_s cos + C_d / 3) n]``."""
+    if not srp:
+        return (a * u[0], a * u[1], a * u[2])
+    cs = params[b + 7]
+    cd = params[b + 8]
+    ks = a * (1.0 - cs)
+    kn = a * 2.0 * (cs * cos + cd / 3.0)
+    return (ks * u[0] + kn * params[b + 1], ks * u[1] + kn * params[b + 2], ks * u[2] + kn * params[b + 3])
+
+
+@jit_inline
+def facet_torque(srp, q, scale, u_s, params, p0, nfacets):
+    """``sum r x F`` (body axes) over the ``nfacets`` facets at ``params[p0:]`` that face the
+    unit direction ``u_s`` (inertial axes; the body's attitude ``q``), with the force of
+    :func:`facet_force` for ``scale`` = ``1/2 rho |v|^2`` (drag) or the pressure (SRP)."""
+    u = rotate_inv(q, u_s)
+    tx = 0.0
+    ty = 0.0
+    tz = 0.0
+    for f in range(nfacets):
+        b = p0 + f * FACET_SIZE
+        cos = params[b + 1] * u[0] + params[b + 2] * u[1] + params[b + 3] * u[2]
+        if cos > 0.0:
+            t = cross((params[b + 4], params[b + 5], params[b + 6]),
+                      facet_force(srp, -scale * params[b] * cos, cos, u, params, b))
+            tx, ty, tz = tx + t[0], ty + t[1], tz + t[2]
+    return (tx, ty, tz)
 
 
 @jit_inline
 def facet_drag(q, k, vhat_s, params, p0, nfacets):
     """Drag torque (body axes) of ``nfacets`` facets at ``params[p0:]`` for the attitude ``q``,
     ``k = 1/2 rho |v|^2`` and the unit relative velocity ``vhat_s`` in inertial axes."""
-    v = rotate_inv(q, vhat_s)
-    tx = 0.0
-    ty = 0.0
-    tz = 0.0
-    for f in range(nfacets):
-        b = p0 + f * FACET_SIZE
-        cos = params[b + 1] * v[0] + params[b + 2] * v[1] + params[b + 3] * v[2]
-        if cos > 0.0:
-            s = -k * params[b] * cos
-            tx, ty, tz = add_lever_torque(tx, ty, tz, params, b, (s * v[0], s * v[1], s * v[2]))
-    return (tx, ty, tz)
+    return facet_torque(False, q, k, vhat_s, params, p0, nfacets)
 
 
 @jit_inline
@@ -63,23 +78,7 @@ def facet_srp(q, pressure, shat_s, params, p0, nfacets):
     """Solar-radiation-pressure torque (body axes) of ``nfacets`` facets at ``params[p0:]``
     for the attitude ``q``, the pressure ``pressure = nu Phi / c (1 AU / d)^2`` and the unit
     vector to the Sun ``shat_s`` in inertial axes."""
-    s = rotate_inv(q, shat_s)
-    tx = 0.0
-    ty = 0.0
-    tz = 0.0
-    for f in range(nfacets):
-        b = p0 + f * FACET_SIZE
-        n = (params[b + 1], params[b + 2], params[b + 3])
-        cos = n[0] * s[0] + n[1] * s[1] + n[2] * s[2]
-        if cos > 0.0:
-            cs = params[b + 7]
-            cd = params[b + 8]
-            a = -pressure * params[b] * cos
-            ks = a * (1.0 - cs)
-            kn = a * 2.0 * (cs * cos + cd / 3.0)
-            tx, ty, tz = add_lever_torque(tx, ty, tz, params, b, (ks * s[0] + kn * n[0], ks * s[1] + kn * n[1],
-                                                                  ks * s[2] + kn * n[2]))
-    return (tx, ty, tz)
+    return facet_torque(True, q, pressure, shat_s, params, p0, nfacets)
 
 
 @jit_inline

@@ -68,6 +68,7 @@ from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError
 from ..epoch import parse_epoch
+from .key_docs import parse_key_docs
 from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
 from .control_schema import CONTROL_KEYS, parse_control
@@ -92,122 +93,140 @@ TABLES = {
     "environment": ENVIRONMENT_KEYS,
     "control": CONTROL_KEYS,  # validated by parse_control (control_schema.py)
 }
-#: what each key of :data:`TABLES` is: ``(dimension, default, meaning)`` (``docs/scenarios.md``
-#: is generated from this table by :mod:`orbatt.scenario.reference`; a test keeps the two equal
-#: and every key described). "plain" dimensions are numbers without a unit; a quantity is a
-#: string astropy parses ("7000 km"), or a plain number in a scenario in normalized units.
-KEY_DOCS = {
-    "": {
-        "name": ("text", "the file name", "the scenario's name (Dataset title, `orbatt scenarios`)"),
-        "description": ("text", '""', "one line saying what the study is"),
-    },
-    "body": {
-        "inertia": ("mass x length^2, 3 values", "required", "principal moments [I1, I2, I3] about body axes 1, 2, "
-                    "3; plain numbers make the scenario dimensionless (normalized units)"),
-        "mass_g": ("force", "required for heavy-top", "weight M g of the heavy top"),
-        "center_of_mass": ("length, 3 values", "required for heavy-top", "centre of mass in body axes, relative to "
-                           "the fixed point"),
-        "facets": ("array of tables", "none", "[[body.facets]]: the flat plates of the body, for [torques] drag and "
-                   "srp (keys below)"),
-        "wheels": ("array of tables", "none", "[[body.wheels]]: reaction wheels (keys below); the body becomes a "
-                   "gyrostat and `inertia` is that of the whole spacecraft with the rotors locked"),
-    },
-    "body.wheels": {
-        "axis": ("plain, 3 values", "required", "unit spin axis, body axes"),
-        "inertia": ("mass x length^2", "required", "axial moment of the rotor"),
-        "speed": ("angular rate", "0", "rotor speed relative to the body at the start (`\"1000 rpm\"`)"),
-        "max_torque": ("torque (N m)", "none", "motor torque limit"),
-        "max_speed": ("angular rate", "none", "speed limit: the motor does not push the rotor beyond it"),
-    },
-    "control": {
-        "law": ("'pd' | 'bdot'", "required", "quaternion PD feedback, or B-dot detumbling with magnetorquers"),
-        "target": ("'orbital' | 'inertial' | 'sun'", "'orbital'", "pd: hold the orbital frame (q_orbital -> 1), the "
-                   "attitude target_q, or point target_axis at the Sun (needs [orbit] epoch)"),
-        "target_q": ("plain, 4 values", "required for inertial", "pd: target attitude [w, x, y, z], body -> inertial; "
-                     "with target = 'orbital' (optional) the held attitude relative to the orbital frame"),
-        "target_axis": ("plain, 3 values", "required for sun", "pd: unit body axis to point at the Sun"),
-        "kp": ("torque (N m)", "required for pd", "torque per unit quaternion error"),
-        "kd": ("torque x time (N m s)", "required for pd", "torque per unit rate error (rad/s)"),
-        "max_torque": ("torque (N m)", "none", "pd: per-axis saturation of the commanded torque"),
-        "actuator": ("'ideal' | 'wheels'", "'ideal'", "pd: an ideal external torque, or the [[body.wheels]] (their "
-                     "axes must span 3 dimensions; their limits apply)"),
-        "gain": ("A m2 s / T", "required for bdot", "bdot: m = -gain dB/dt (body axes); reads [environment] "
-                 "magnetic_field"),
-        "max_dipole": ("magnetic moment (A m2)", "required for bdot", "bdot: per-axis limit of the dipole"),
-    },
-    "body.facets": {
-        "area": ("area", "required", "the plate's area (> 0)"),
-        "normal": ("plain, 3 values", "required", "outward unit normal, body axes"),
-        "position": ("length, 3 values", "required", "centre of pressure from the centre of mass, body axes"),
-        "drag_coefficient": ("plain", "2.2", "C_D of the plate (drag)"),
-        "specular": ("plain in [0, 1]", "0", "specular reflectivity (SRP); absorbed = 1 - specular - diffuse"),
-        "diffuse": ("plain in [0, 1]", "0", "diffuse reflectivity (SRP)"),
-    },
-    "torques": {
-        "drag": ("true | false", "false", "aerodynamic drag of the facets (needs [[body.facets]])"),
-        "srp": ("true | false", "false", "solar radiation pressure on the facets (needs facets and [orbit] epoch)"),
-        "residual_dipole": ("magnetic moment (A m2), 3 values", "none", "the body's dipole m: torque m x B (body "
-                            "axes)"),
-    },
-    "environment": {
-        "atmosphere": ("'exponential' | 'nrlmsis' | 'none'", "'exponential' with drag", "density model (NRLMSIS "
-                       "2.1 through pymsis needs the epoch and f107, f107a, ap)"),
-        "density0": ("density", "Vallado's table", "exponential: density at altitude0 (with altitude0, "
-                     "scale_height)"),
-        "altitude0": ("length", "Vallado's table", "exponential: reference altitude above the equatorial radius"),
-        "scale_height": ("length", "Vallado's table", "exponential: scale height"),
-        "corotation": ("true | false", "true", "the atmosphere turns with the Earth (drag uses v - omega_E x r)"),
-        "f107": ("plain", "required for nrlmsis", "daily F10.7 solar flux (sfu); never downloaded"),
-        "f107a": ("plain", "required for nrlmsis", "81-day mean F10.7 (sfu)"),
-        "ap": ("plain", "required for nrlmsis", "daily Ap geomagnetic index"),
-        "magnetic_field": ("'igrf' | 'dipole' | 'none'", "'igrf' with a residual dipole", "IGRF-14 (ppigrf) or "
-                           "its tilted dipole at the epoch"),
-        "shadow": ("'conical' | 'cylindrical' | 'none'", "'conical'", "the Earth's shadow for SRP (umbra and "
-                   "penumbra)"),
-    },
-    "initial": {
-        "q": ("plain, 4 values", "-", "attitude quaternion (q0 scalar first), body -> `frame` components; |q| = 1"),
-        "Q": ("momentum, 4 values", "-", "conjugate momentum Q = 2 q (0, I omega) (inertial frame only)"),
-        "omega": ("angular rate, 3 values", "-", "body angular velocity in body axes (relative to the orbital frame "
-                  "when frame = 'orbital')"),
-        "euler_313": ("angle, 3 values", "-", "3-1-3 Euler angles (phi, theta, psi) instead of q"),
-        "euler_momenta": ("momentum, 3 values", "-", "momenta conjugate to the 3-1-3 angles (inertial frame only)"),
-        "frame": ("'inertial' | 'orbital'", "'inertial'", "the frame q, euler_313 and omega are relative to"),
-    },
-    "potential": {
-        "kind": ("'torque-free' | 'heavy-top' | 'gravity-gradient'", "required", "the torque acting on the body"),
-        "sign": ("'physical' | 'paper'", "'physical'", "heavy top: U = M g z_c, or eq. (18) as printed (Fig. 2)"),
-    },
-    "orbit": {
-        "provider": ("'kepler' | 'rebound' | 'tle'", "'kepler'", "Keplerian elements, REBOUND integration, or SGP4 "
-                     "from a TLE"),
-        "central_body": ("'earth'", "'earth'", "the central body (its GM from astropy); or give gm"),
-        "gm": ("length^3 / time^2", "the Earth's", "central body's G M (a plain number in normalized units: gm = 1, "
-               "a = 1 make the mean motion 1)"),
-        "a": ("length", "required (not tle)", "semi-major axis (> 0; the unit of length in normalized units)"),
-        "e": ("plain", "required (not tle)", "eccentricity, 0 <= e < 1"),
-        "i": ("angle", "required (not tle)", "inclination to the s1-s2 plane of the inertial frame"),
-        "raan": ("angle", "required (not tle)", "right ascension of the ascending node"),
-        "argp": ("angle", "required (not tle)", "argument of periapsis"),
-        "true_anomaly": ("angle", "one of the two", "true anomaly at t = 0"),
-        "mean_anomaly": ("angle", "one of the two", "mean anomaly at t = 0"),
-        "epoch": ("ISO time (UTC)", "none; tle: the TLE's", "the instant t = 0 (CF time axis, third bodies)"),
-        "perturbations": ("list of 'j2' | 'moon' | 'sun'", "[]", "rebound: forces besides the central point mass"),
-        "integrator": ("'ias15' | 'whfast'", "'ias15'", "rebound: the REBOUND integrator"),
-        "tle": ("2 text lines", "one of tle, tle_file", "tle: the two-line element set"),
-        "tle_file": ("path", "one of tle, tle_file", "tle: a file with the two lines (a name line optional), "
-                     "relative to the scenario file"),
-    },
-    "integration": {
-        "method": ("text", "'dop853'", "the integration method (`orbatt methods` lists them)"),
-        "rtol": ("plain", "the method's", "relative tolerance (adaptive methods)"),
-        "atol": ("plain", "the method's", "absolute tolerance (adaptive methods)"),
-        "step": ("time or 'N orbits'", "required by fixed-step methods", "the fixed step"),
-        "t_end": ("time or 'N orbits'", "required", "the span; outputs at k * output_step <= t_end"),
-        "output_step": ("time or 'N orbits'", "required", "spacing of the output times"),
-    },
-    "sweep": {},  # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
-}
+#: what each key of :data:`TABLES` is: ``(dimension, default, meaning)``, written as a table
+#: (:mod:`orbatt.scenario.key_docs`); ``docs/scenarios.md`` is generated from it by
+#: :mod:`orbatt.scenario.reference` (a test keeps the two equal and every key described).
+#: "plain" dimensions are numbers without a unit; a quantity is a string astropy parses
+#: ("7000 km"), or a plain number in a scenario in normalized units.
+KEY_DOCS = parse_key_docs("""
+[]
+name         text  the file name  the scenario's name (Dataset title, `orbatt scenarios`)
+description  text  ""             one line saying what the study is
+
+[body]
+inertia         mass x length^2, 3 values  required                principal moments [I1, I2, I3] about body axes 1,
+                                                                   2, 3; plain numbers make the scenario
+                                                                   dimensionless (normalized units)
+mass_g          force                      required for heavy-top  weight M g of the heavy top
+center_of_mass  length, 3 values           required for heavy-top  centre of mass in body axes, relative to the
+                                                                   fixed point
+facets          array of tables            none                    [[body.facets]]: the flat plates of the body, for
+                                                                   [torques] drag and srp (keys below)
+wheels          array of tables            none                    [[body.wheels]]: reaction wheels (keys below);
+                                                                   the body becomes a gyrostat and `inertia` is that
+                                                                   of the whole spacecraft with the rotors locked
+
+[body.wheels]
+axis        plain, 3 values  required  unit spin axis, body axes
+inertia     mass x length^2  required  axial moment of the rotor
+speed       angular rate     0         rotor speed relative to the body at the start (`"1000 rpm"`)
+max_torque  torque (N m)     none      motor torque limit
+max_speed   angular rate     none      speed limit: the motor does not push the rotor beyond it
+
+[control]
+law          'pd' | 'bdot'                   required               quaternion PD feedback, or B-dot detumbling with
+                                                                    magnetorquers
+target       'orbital' | 'inertial' | 'sun'  'orbital'              pd: hold the orbital frame (q_orbital -> 1), the
+                                                                    attitude target_q, or point target_axis at the
+                                                                    Sun (needs [orbit] epoch)
+target_q     plain, 4 values                 required for inertial  pd: target attitude [w, x, y, z], body ->
+                                                                    inertial; with target = 'orbital' (optional) the
+                                                                    held attitude relative to the orbital frame
+target_axis  plain, 3 values                 required for sun       pd: unit body axis to point at the Sun
+kp           torque (N m)                    required for pd        torque per unit quaternion error
+kd           torque x time (N m s)           required for pd        torque per unit rate error (rad/s)
+max_torque   torque (N m)                    none                   pd: per-axis saturation of the commanded torque
+actuator     'ideal' | 'wheels'              'ideal'                pd: an ideal external torque, or the
+                                                                    [[body.wheels]] (their axes must span 3
+                                                                    dimensions; their limits apply)
+gain         A m2 s / T                      required for bdot      bdot: m = -gain dB/dt (body axes); reads
+                                                                    [environment] magnetic_field
+max_dipole   magnetic moment (A m2)          required for bdot      bdot: per-axis limit of the dipole
+
+[body.facets]
+area              area              required  the plate's area (> 0)
+normal            plain, 3 values   required  outward unit normal, body axes
+position          length, 3 values  required  centre of pressure from the centre of mass, body axes
+drag_coefficient  plain             2.2       C_D of the plate (drag)
+specular          plain in [0, 1]   0         specular reflectivity (SRP); absorbed = 1 - specular - diffuse
+diffuse           plain in [0, 1]   0         diffuse reflectivity (SRP)
+
+[torques]
+drag             true | false                      false  aerodynamic drag of the facets (needs [[body.facets]])
+srp              true | false                      false  solar radiation pressure on the facets (needs facets and
+                                                          [orbit] epoch)
+residual_dipole  magnetic moment (A m2), 3 values  none   the body's dipole m: torque m x B (body axes)
+
+[environment]
+atmosphere      'exponential' | 'nrlmsis' | 'none'  'exponential' with drag        density model (NRLMSIS 2.1 through
+                                                                                   pymsis needs the epoch and f107, f107a,
+                                                                                   ap)
+density0        density                             Vallado's table                exponential: density at altitude0 (with
+                                                                                   altitude0, scale_height)
+altitude0       length                              Vallado's table                exponential: reference altitude above
+                                                                                   the equatorial radius
+scale_height    length                              Vallado's table                exponential: scale height
+corotation      true | false                        true                           the atmosphere turns with the Earth
+                                                                                   (drag uses v - omega_E x r)
+f107            plain                               required for nrlmsis           daily F10.7 solar flux (sfu); never
+                                                                                   downloaded
+f107a           plain                               required for nrlmsis           81-day mean F10.7 (sfu)
+ap              plain                               required for nrlmsis           daily Ap geomagnetic index
+magnetic_field  'igrf' | 'dipole' | 'none'          'igrf' with a residual dipole  IGRF-14 (ppigrf) or its tilted dipole at
+                                                                                   the epoch
+shadow          'conical' | 'cylindrical' | 'none'  'conical'                      the Earth's shadow for SRP (umbra and
+                                                                                   penumbra)
+
+[initial]
+q              plain, 4 values         -           attitude quaternion (q0 scalar first), body -> `frame`
+                                                   components; |q| = 1
+Q              momentum, 4 values      -           conjugate momentum Q = 2 q (0, I omega) (inertial frame only)
+omega          angular rate, 3 values  -           body angular velocity in body axes (relative to the orbital frame
+                                                   when frame = 'orbital')
+euler_313      angle, 3 values         -           3-1-3 Euler angles (phi, theta, psi) instead of q
+euler_momenta  momentum, 3 values      -           momenta conjugate to the 3-1-3 angles (inertial frame only)
+frame          'inertial' | 'orbital'  'inertial'  the frame q, euler_313 and omega are relative to
+
+[potential]
+kind  'torque-free' | 'heavy-top' | 'gravity-gradient'  required    the torque acting on the body
+sign  'physical' | 'paper'                              'physical'  heavy top: U = M g z_c, or eq. (18) as printed
+                                                                    (Fig. 2)
+
+[orbit]
+provider       'kepler' | 'rebound' | 'tle'   'kepler'              Keplerian elements, REBOUND integration, or SGP4
+                                                                    from a TLE
+central_body   'earth'                        'earth'               the central body (its GM from astropy); or give
+                                                                    gm
+gm             length^3 / time^2              the Earth's           central body's G M (a plain number in normalized
+                                                                    units: gm = 1, a = 1 make the mean motion 1)
+a              length                         required (not tle)    semi-major axis (> 0; the unit of length in
+                                                                    normalized units)
+e              plain                          required (not tle)    eccentricity, 0 <= e < 1
+i              angle                          required (not tle)    inclination to the s1-s2 plane of the inertial
+                                                                    frame
+raan           angle                          required (not tle)    right ascension of the ascending node
+argp           angle                          required (not tle)    argument of periapsis
+true_anomaly   angle                          one of the two        true anomaly at t = 0
+mean_anomaly   angle                          one of the two        mean anomaly at t = 0
+epoch          ISO time (UTC)                 none; tle: the TLE's  the instant t = 0 (CF time axis, third bodies)
+perturbations  list of 'j2' | 'moon' | 'sun'  []                    rebound: forces besides the central point mass
+integrator     'ias15' | 'whfast'             'ias15'               rebound: the REBOUND integrator
+tle            2 text lines                   one of tle, tle_file  tle: the two-line element set
+tle_file       path                           one of tle, tle_file  tle: a file with the two lines (a name line
+                                                                    optional), relative to the scenario file
+
+[integration]
+method       text                'dop853'                        the integration method (`orbatt methods` lists
+                                                                 them)
+rtol         plain               the method's                    relative tolerance (adaptive methods)
+atol         plain               the method's                    absolute tolerance (adaptive methods)
+step         time or 'N orbits'  required by fixed-step methods  the fixed step
+t_end        time or 'N orbits'  required                        the span; outputs at k * output_step <= t_end
+output_step  time or 'N orbits'  required                        spacing of the output times
+
+[sweep]
+# described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
+""")
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: physical range of a key in a dimensional scenario, internal units (km, s, kg, rad), inclusive
 RANGES = {

@@ -15,6 +15,7 @@ import numpy as np
 from .. import units as U
 from ..dataset import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from .fields import parse_int, parse_quantity
+from .key_docs import parse_key_docs
 
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
            "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
@@ -23,21 +24,30 @@ __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "D
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
               "tumbling_angle", "on_invalid")
-#: what each key of [sweep] is: ``(dimension, default, meaning)`` (``docs/scenarios.md``)
-SWEEP_KEY_DOCS = {
-    "parameters": ("table", "required", "[sweep.parameters]: each varied parameter, with `values = [...]` (a grid) or "
-                   "a `distribution` ('uniform': low, high; 'normal': mean, std; 'truncnormal': mean, std, low, high)"),
-    "samples": ("plain integer", "required with random parameters", "number of random draws"),
-    "seed": ("plain integer", "drawn and recorded", "seed of the random draws (numpy PCG64)"),
-    "chunk_size": ("plain integer", "automatic", "cases per task"),
-    "outputs": ("list", "['final_state', 'max_pointing_error', 'tumbling']", "per-case outputs, of 'trajectory', "
-                "'final_state', 'max_pointing_error', 'tumbling', 'final_energy_error'"),
-    "pointing_axis": ("plain, 3 values", "none: the whole attitude", "body axis whose pointing error is measured "
-                      "(without it: the rotation angle of the attitude from the reference)"),
-    "pointing_reference": ("'orbital' | 'inertial'", "the [initial] frame", "frame the pointing is measured in"),
-    "tumbling_angle": ("angle", "90 deg", "pointing error beyond which a case tumbles"),
-    "on_invalid": ("'error' | 'resample'", "'error'", "what to do with a draw outside the physical limits"),
-}
+#: what each key of [sweep] is: ``(dimension, default, meaning)`` (``docs/scenarios.md``), written
+#: as a table (:mod:`orbatt.scenario.key_docs`)
+SWEEP_KEY_DOCS = parse_key_docs("""
+[sweep]
+parameters          table                   required                                           [sweep.parameters]: each varied
+                                                                                               parameter, with `values = [...]` (a
+                                                                                               grid) or a `distribution` ('uniform':
+                                                                                               low, high; 'normal': mean, std;
+                                                                                               'truncnormal': mean, std, low, high)
+samples             plain integer           required with random parameters                    number of random draws
+seed                plain integer           drawn and recorded                                 seed of the random draws (numpy PCG64)
+chunk_size          plain integer           automatic                                          cases per task
+outputs             list                    ['final_state', 'max_pointing_error', 'tumbling']  per-case outputs, of 'trajectory',
+                                                                                               'final_state', 'max_pointing_error',
+                                                                                               'tumbling', 'final_energy_error'
+pointing_axis       plain, 3 values         none: the whole attitude                           body axis whose pointing error is
+                                                                                               measured (without it: the rotation angle
+                                                                                               of the attitude from the reference)
+pointing_reference  'orbital' | 'inertial'  the [initial] frame                                frame the pointing is measured in
+tumbling_angle      angle                   90 deg                                             pointing error beyond which a case
+                                                                                               tumbles
+on_invalid          'error' | 'resample'    'error'                                            what to do with a draw outside the
+                                                                                               physical limits
+""")["sweep"]
 #: outputs that may be asked for
 OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error")
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
