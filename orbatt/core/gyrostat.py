@@ -23,7 +23,7 @@ import numpy as np
 from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import spline_eval, spline_eval_rate
-from .model import (BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, gradient, orbit_radial)
+from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, orbit_radial, terms_at
 from .qalg import qconj, qmul
 from .torques import gradient_of_torque
 
@@ -74,18 +74,17 @@ def body_rate(g, y, inertia, params, w0):
 
 
 @jit_inline
-def control_torques(t, q, omega, y, terms, params, table, work, w0, u):
+def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, v):
     """``(tau_ext, tau_applied, m)``: the external control torque (ideal PD and B-dot, body
     axes), the torque the control applies to the body (external or the wheels' reaction),
-    and the B-dot dipole; the wheels' motor torques go into ``u`` (zero without a
-    wheel-actuated law)."""
+    and the B-dot dipole, for the orbit's ``r, xhat, v`` at ``t`` (:func:`orbit_radial`);
+    the wheels' motor torques go into ``u`` (zero without a wheel-actuated law)."""
     for k in range(u.shape[0]):
         u[k] = 0.0
     ext = (0.0, 0.0, 0.0)
     app = (0.0, 0.0, 0.0)
     m = (0.0, 0.0, 0.0)
     n = terms.shape[0]
-    r, xhat, v = orbit_radial(t, terms, params, table, work)
     for j in range(1, n):
         kind = terms[j, KIND]
         p0 = terms[j, P0]
@@ -122,8 +121,10 @@ def rhs_extended(t, y, inertia, terms, params, table, work, dy):
     a = (0.0, 2.0 * omega[0], 2.0 * omega[1], 2.0 * omega[2])
     qd = qmul(q, a)
     Qd = qmul(Q, a)
-    _, G = gradient(t, q, inertia, terms, params, table, work)
-    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:])
+    # the orbit once for the terms and the control law (an extended model has >= 1 term)
+    r, xhat, v = orbit_radial(t, terms, params, table, work)
+    _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
+    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:], r, xhat, v)
     Gc = gradient_of_torque(q, ext)
     for k in range(4):
         dy[k] = 0.25 * qd[k]
@@ -149,7 +150,8 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
         q = (y[0], y[1], y[2], y[3])
         w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
         om, hv = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
-        _, app, mi = control_torques(t[i], q, om, y, terms, params, table, work, w0, u[i])
+        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
+        _, app, mi = control_torques(t[i], q, om, y, terms, params, table, work, w0, u[i], r, xhat, v)
         for k in range(3):
             omega[i, k] = om[k]
             h[i, k] = hv[k]
