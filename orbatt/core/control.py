@@ -40,7 +40,7 @@ import math
 
 import numpy as np
 
-from ._jit import jit, jit_inline
+from ._jit import jit_inline
 from .qalg import cross, qconj, qmul, rotate_inv
 
 #: PD targets
