@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -82,27 +83,48 @@ def test_first_run_interprets_and_starts_the_warm_up(tmp_path, shipped_outputs):
                 pass
 
 
-def _plan(scenario, **env):
+def _same_orbatt(env):
+    """``env`` with ``PYTHONPATH`` leading to the orbatt this process imported (an installed
+    copy and a source tree have different fingerprints)."""
+    import orbatt
+
+    root = str(Path(orbatt.__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = os.pathsep.join([root] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    return env
+
+
+def _plan(scenario, cwd, **env):
+    """``plan(scenario)`` in a fresh process (no numba imported) importing the same orbatt as
+    this process."""
     code = ("import sys; from orbatt import coldstart; c = coldstart.plan(sys.argv[1]); "
             "print('none' if c is None else c.key)")
-    r = subprocess.run([sys.executable, "-c", code, scenario], capture_output=True, text=True, env=_env(**env),
-                       check=True)
+    r = subprocess.run([sys.executable, "-c", code, scenario], capture_output=True, text=True,
+                       env=_same_orbatt(_env(**env)), check=True, cwd=cwd)
     return r.stdout.strip()
+
+
+def _fingerprint(cwd):
+    """:func:`coldstart.fingerprint` as the processes of :func:`_plan` see it."""
+    code = "import json; from orbatt import coldstart; print(json.dumps(coldstart.fingerprint()))"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_same_orbatt(_env()),
+                       check=True, cwd=cwd)
+    return json.loads(r.stdout)
 
 
 def test_plan_interprets_only_a_cold_first_run(tmp_path):
     cache = str(tmp_path / "cache")
-    key = _plan("paper-keplerian", NUMBA_CACHE_DIR=cache)
+    key = _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache)
     assert key == coldstart.kernel_key("paper-keplerian")
-    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache, ORBATT_COLD_START="compile") == "none"
-    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache, NUMBA_DISABLE_JIT="1") == "none"
-    assert _plan(str(tmp_path / "missing.toml"), NUMBA_CACHE_DIR=cache) == "none"  # the run reports it
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache, ORBATT_COLD_START="compile") == "none"
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache, NUMBA_DISABLE_JIT="1") == "none"
+    assert _plan(str(tmp_path / "missing.toml"), tmp_path, NUMBA_CACHE_DIR=cache) == "none"  # the run reports it
     stamp = tmp_path / "cache" / "orbatt" / f"warm-{key}.json"
     stamp.parent.mkdir(parents=True)
-    stamp.write_text(json.dumps(coldstart.fingerprint()))
-    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache) == "none"
-    stamp.write_text(json.dumps({**coldstart.fingerprint(), "numba": "0.0"}))  # another numba: cold again
-    assert _plan("paper-keplerian", NUMBA_CACHE_DIR=cache) == key
+    fp = _fingerprint(tmp_path)
+    stamp.write_text(json.dumps(fp))
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache) == "none"
+    stamp.write_text(json.dumps({**fp, "numba": "0.0"}))  # another numba: cold again
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache) == key
 
 
 def test_kernel_key_follows_the_model_not_the_numbers(tmp_path, shipped_outputs):

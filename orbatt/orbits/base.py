@@ -9,6 +9,7 @@ from astropy import units as u
 
 from .. import quaternion as qt
 from .. import units as U
+from ..epoch import epoch_string, parse_epoch  # noqa: F401  (the old names: tests/test_epoch.py)
 from ..errors import InputError
 
 #: Earth's mass parameter (km^3 s^-2): astropy ``GM_earth`` (IAU 2015 nominal, 398600.4 km^3/s^2).
