@@ -38,7 +38,9 @@ class _AccessorWithXarray:
 
 
 def _register_accessor():
-    from .dataset import accessor  # noqa: F401  (registers ds.orbatt)
+    import importlib
+
+    importlib.import_module(".dataset.accessor", __package__)  # registers ds.orbatt
 
 
 def _remove_finder():
