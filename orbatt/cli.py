@@ -90,22 +90,18 @@ def _parser():
 
 def _cmd_run(args):
     from . import coldstart
+    from .errors import InputError
 
     cold = coldstart.plan(args.scenario, args.method)
-    if cold is not None:  # a first run of this kind: interpreted kernels, compiling in the background
-        os.environ["NUMBA_DISABLE_JIT"] = "1"  # before numba's import
+    if cold is None:
+        return _run(args, None)
+    os.environ["NUMBA_DISABLE_JIT"] = "1"  # a first run of this kind: interpreted kernels (before numba's import)
     try:
         return _run(args, cold)
-    except Exception:
-        if cold is None:
-            raise
-        # an exception the interpreted kernels raise where compiled code gives inf/NaN, or any
-        # failure: the compiled run decides (bad input was refused before any kernel ran)
-        from .errors import InputError
-
-        if isinstance(sys.exc_info()[1], InputError):
-            raise
-        return cold.rerun_compiled(args.argv)
+    except InputError:  # bad input, refused before any kernel ran
+        raise
+    except Exception:  # noqa: BLE001 - raised where compiled code gives inf/NaN, or any failure:
+        return cold.rerun_compiled(args.argv)  # the compiled run decides
 
 
 def _run(args, cold):

@@ -107,14 +107,24 @@ def kernel_key(scenario, method=None) -> str | None:
         doc = tomllib.loads(f.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return None
-    integ = doc.get("integration") if isinstance(doc.get("integration"), dict) else {}
-    m = method or integ.get("method", "dop853")
+
+    def table(name):
+        return doc[name] if isinstance(doc.get(name), dict) else {}
+
+    m = method or table("integration").get("method", "dop853")
     shape = {"tables": sorted(k for k, v in doc.items() if isinstance(v, (dict, list))),
-             "potential": (doc.get("potential") or {}).get("kind") if isinstance(doc.get("potential"), dict) else None,
-             "orbit": (doc.get("orbit") or {}).get("provider") if isinstance(doc.get("orbit"), dict) else None,
-             "wheels": bool(isinstance(doc.get("body"), dict) and doc["body"].get("wheels"))}
+             "potential": table("potential").get("kind"), "orbit": table("orbit").get("provider"),
+             "wheels": bool(table("body").get("wheels"))}
     digest = hashlib.sha1(json.dumps(shape, sort_keys=True, default=str).encode()).hexdigest()[:12]
     return f"{''.join(c if c.isalnum() or c in '-_' else '_' for c in str(m))[:40]}-{digest}"
+
+
+def _compiled_env() -> dict:
+    """This process's environment for a child that runs compiled: no ``NUMBA_DISABLE_JIT``,
+    and ``ORBATT_COLD_START=compile`` (it never starts a warm-up of its own)."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
+    env[ENV_MODE] = "compile"
+    return env
 
 
 def _alive(pid: int) -> bool:
@@ -138,13 +148,16 @@ class ColdStart:
         self.lock = self.folder / f"warm-{key}.lock"
         self.process = None
         self.switched = False
+        self._fingerprint = None  # this process's sources do not change while it runs
 
     def is_warm(self) -> bool:
         """The warm stamp is there and matches :func:`fingerprint`."""
         if not self.stamp.is_file():
             return False
+        if self._fingerprint is None:
+            self._fingerprint = fingerprint()
         try:
-            return json.loads(self.stamp.read_text()) == fingerprint()
+            return json.loads(self.stamp.read_text()) == self._fingerprint
         except (OSError, ValueError):
             return False
 
@@ -156,13 +169,11 @@ class ColdStart:
                 return
         except (OSError, ValueError):
             pass
-        env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
-        env[ENV_MODE] = "compile"
         cmd = [sys.executable, "-m", "orbatt.coldstart", str(self.scenario), str(self.method or ""),
                str(self.stamp)]
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
-            self.process = subprocess.Popen(cmd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            self.process = subprocess.Popen(cmd, env=_compiled_env(), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                             stderr=subprocess.DEVNULL, start_new_session=True)
             self.lock.write_text(str(self.process.pid))
         except OSError:  # no warm-up: the next run compiles in its own process, as without this
@@ -191,9 +202,7 @@ class ColdStart:
         """Run ``orbatt argv`` again in a new process with the compiled kernels (after the
         warm-up has filled the cache); its exit code."""
         self.wait_for_warm_up()
-        env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
-        env[ENV_MODE] = "compile"
-        return subprocess.call([sys.executable, "-m", "orbatt.cli", *argv], env=env)
+        return subprocess.call([sys.executable, "-m", "orbatt.cli", *argv], env=_compiled_env())
 
 
 def plan(scenario, method=None) -> ColdStart | None:

@@ -89,7 +89,6 @@ def _index_copy_works():
             and ours._data is theirs._data)
 
 
-
 def _as_variable(var):
     """``var`` if it is an :class:`xarray.Variable`, else the variable of its ``dims``,
     ``values`` and ``attrs`` (an :class:`orbatt.dataset.content.Var`)."""
