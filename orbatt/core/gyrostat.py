@@ -23,7 +23,7 @@ import numpy as np
 from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import spline_eval, spline_eval_rate
-from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, orbit_radial, terms_at
+from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, orbit_at, orbit_radial, terms_at
 from .qalg import qconj, qmul
 from .torques import gradient_of_torque
 
@@ -110,9 +110,10 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
 
 
 @jit
-def rhs_extended(t, y, inertia, terms, params, table, work, dy):
-    """``dy/dt`` of the gyrostat with control (module docstring) into ``dy`` (``len(y)``
-    components: 8 plus one per wheel)."""
+def rhs_extended(s, y, inertia, terms, params, table, work, dy):
+    """``dy/ds`` of the gyrostat with control (module docstring) into ``dy`` (``len(y)``
+    components: 8 plus one per wheel); ``s`` the time, or the eccentric anomaly
+    (``dy/ds = dt/ds dy/dt``, :func:`orbatt.core.hamiltonian.rhs`)."""
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
     w0 = wheel_row(terms)
@@ -122,13 +123,16 @@ def rhs_extended(t, y, inertia, terms, params, table, work, dy):
     qd = qmul(q, a)
     Qd = qmul(Q, a)
     # the orbit once for the terms and the control law (an extended model has >= 1 term)
-    r, xhat, v = orbit_radial(t, terms, params, table, work)
+    t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
     _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
     ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:], r, xhat, v)
     Gc = gradient_of_torque(q, ext)
     for k in range(4):
-        dy[k] = 0.25 * qd[k]
-        dy[4 + k] = 0.25 * Qd[k] - G[k] - Gc[k]
+        dy[k] = dtds * (0.25 * qd[k])
+        dy[4 + k] = dtds * (0.25 * Qd[k] - G[k] - Gc[k])
+    if dtds != 1.0:
+        for k in range(8, y.shape[0]):
+            dy[k] *= dtds
 
 
 @jit

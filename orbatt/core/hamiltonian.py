@@ -18,7 +18,7 @@ compare with.
 from __future__ import annotations
 
 from ._jit import jit, jit_inline
-from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient, orbit_radial, term_constants, term_value,
+from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient, gradient_at, orbit_at, term_constants, term_value,
                     terms_lanes)
 from .qalg import qconj, qmul
 
@@ -37,18 +37,21 @@ def eq7(q, Q, a):
     return qmul(q, a), qmul(Q, a)
 
 
-def _rhs(t, y, inertia, terms, params, table, work, dy):
-    """Write ``dy/dt`` (eq. 7) into ``dy`` for the model ``terms, params, table`` (a model with
+def _rhs(s, y, inertia, terms, params, table, work, dy):
+    """Write ``dy/ds`` (eq. 7) into ``dy`` for the model ``terms, params, table`` (a model with
     wheels or a control law, row 0's ``EXTENDED`` flag, takes
-    :func:`orbatt.core.gyrostat.rhs_extended` instead: the step loops choose it)."""
+    :func:`orbatt.core.gyrostat.rhs_extended` instead: the step loops choose it). ``s`` is the
+    time, or the eccentric anomaly for an orbit of kind ``ORBIT_KEPLER_ANOMALY``
+    (``dy/ds = dt/ds dy/dt``; :mod:`orbatt.core.model`); ``dt/ds = 1`` leaves the numbers of
+    ``dy/dt`` exact."""
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
     _, a = kinetic_rates(q, Q, inertia)
     qd, Qd = eq7(q, Q, a)
-    _, G = gradient(t, q, inertia, terms, params, table, work)
+    dtds, G = gradient_at(s, q, inertia, terms, params, table, work)
     for k in range(4):
-        dy[k] = 0.25 * qd[k]
-        dy[4 + k] = 0.25 * Qd[k] - G[k]
+        dy[k] = dtds * (0.25 * qd[k])
+        dy[4 + k] = dtds * (0.25 * Qd[k] - G[k])
 
 
 @jit_inline
@@ -63,25 +66,26 @@ def _lane(Y, I, l):
 
 
 @jit_inline
-def _store_lane(dY, l, q, Q, a, g):
+def _store_lane(dY, l, q, Q, a, g, dtds):
     """``dY[:, l]``: eq. (7) of lane ``l`` from its rates ``a`` and its summed gradient ``g``.
     The lane loops evaluate ``g`` between :func:`_lane` and this (as 0.1.0's lane loops did):
     with ``q a, Q a`` formed first and held across the term, the vectorized gravity-gradient
-    loop spilled registers (32 lanes: 425 instead of ~400 ns a call)."""
+    loop spilled registers (32 lanes: 425 instead of ~400 ns a call). ``dtds``: the rate of
+    the time in the independent variable (:func:`_rhs`)."""
     qd, Qd = eq7(q, Q, a)
     for k in range(4):
-        dY[k, l] = 0.25 * qd[k]
-        dY[4 + k, l] = 0.25 * Qd[k] - g[k]
+        dY[k, l] = dtds * (0.25 * qd[k])
+        dY[4 + k, l] = dtds * (0.25 * Qd[k] - g[k])
 
 
 @jit_inline
-def _lanes_one_term(kind, p0, c, Y, nl, I, params, dY):
+def _lanes_one_term(kind, p0, c, Y, nl, I, params, dY, dtds):
     """Eq. (7) with a single term of ``kind`` (constants ``c``) over the lanes, in one fused
     loop (with a constant ``kind`` the term's dispatch folds away and the loop vectorizes)."""
     for l in range(nl):
         q, Q, inertia, a = _lane(Y, I, l)
         _, g = term_value(kind, p0, c, q, inertia, params)
-        _store_lane(dY, l, q, Q, a, g)
+        _store_lane(dY, l, q, Q, a, g, dtds)
 
 
 #: :func:`_rhs` compiled once and called (the cold call sites: first derivatives, FSAL)
@@ -92,8 +96,9 @@ rhs_inline = jit_inline(_rhs)
 
 
 @jit
-def rhs_lanes(t, Y, nl, I, terms, params, table, work, G, dY):
-    """Eq. (7) for lanes ``0..nl-1`` of ``Y (8, L)`` at the common time ``t`` (inertia
+def rhs_lanes(s, Y, nl, I, terms, params, table, work, G, dY):
+    """Eq. (7) for lanes ``0..nl-1`` of ``Y (8, L)`` at the common ``s`` (the time, or the
+    eccentric anomaly as in :func:`_rhs`; inertia
     ``I (3, L)``), into ``dY (8, L)``; ``G (4, L)`` is scratch. The operations of :func:`rhs`,
     member by member, with the orbit evaluated once for the group, in loops over the lanes
     that LLVM vectorizes. A model of one term runs one fused loop, specialized to the term's
@@ -107,23 +112,23 @@ def rhs_lanes(t, Y, nl, I, terms, params, table, work, G, dY):
     if n == 1:
         for l in range(nl):
             q, Q, _, a = _lane(Y, I, l)
-            _store_lane(dY, l, q, Q, a, (0.0, 0.0, 0.0, 0.0))
+            _store_lane(dY, l, q, Q, a, (0.0, 0.0, 0.0, 0.0), 1.0)
         return
-    r, xhat, v = orbit_radial(t, terms, params, table, work)
+    t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
     if n == 2:
         kind, p0, c = term_constants(1, t, terms, params, table, work, r, xhat, v)
         # the specializations (the formulas stay in orbatt.core.model.term_value)
         if kind == GRAVITY_GRADIENT:
-            _lanes_one_term(GRAVITY_GRADIENT, p0, c, Y, nl, I, params, dY)
+            _lanes_one_term(GRAVITY_GRADIENT, p0, c, Y, nl, I, params, dY, dtds)
         elif kind == HEAVY_TOP:
-            _lanes_one_term(HEAVY_TOP, p0, c, Y, nl, I, params, dY)
+            _lanes_one_term(HEAVY_TOP, p0, c, Y, nl, I, params, dY, dtds)
         else:
-            _lanes_one_term(kind, p0, c, Y, nl, I, params, dY)
+            _lanes_one_term(kind, p0, c, Y, nl, I, params, dY, dtds)
         return
     terms_lanes(t, Y, nl, I, terms, params, table, work, r, xhat, v, G)
     for l in range(nl):
         q, Q, _, a = _lane(Y, I, l)
-        _store_lane(dY, l, q, Q, a, (G[0, l], G[1, l], G[2, l], G[3, l]))
+        _store_lane(dY, l, q, Q, a, (G[0, l], G[1, l], G[2, l], G[3, l]), dtds)
 
 
 @jit

@@ -257,6 +257,60 @@ def kepler_state(t, orb, work):
     return r, xhat, (vs * P[0] + vc * Q[0], vs * P[1] + vc * Q[1], vs * P[2] + vc * Q[2])
 
 
+@jit_inline
+def kepler_anomaly(E, orb, velocity):
+    """The orbit at the eccentric anomaly ``E`` (rad, unreduced), in closed form: no Kepler
+    solve (the integrators' eccentric-anomaly form, ``orbatt.core.model``'s
+    ``ORBIT_KEPLER_ANOMALY``).
+
+    Returns ``(t, dt/dE, r, xhat, v)``: the time ``t = (E - e sin E - M0) / n``, its rate
+    ``dt/dE = (1 - e cos E) / n = r / (n a)``, the radius and radial unit vector as
+    :func:`kepler_radial` (the same operations from ``sin E, cos E``), and the velocity of
+    :func:`kepler_state` when ``velocity`` (else zero). ``orb`` must be the full vector of
+    :func:`orbit_vector`.
+    """
+    a = orb[0]
+    e = orb[1]
+    n = orb[6]
+    sq = orb[13]
+    ome = orb[14]
+    s = math.sin(E)
+    c = math.cos(E)
+    omc = _one_minus_cos(s, c)
+    rr = ome + e * omc  # 1 - e cos E
+    cf = (ome - omc) / rr  # cos f
+    sf = sq * s / rr  # sin f
+    r = a * rr
+    xhat = (cf * orb[7] + sf * orb[10], cf * orb[8] + sf * orb[11], cf * orb[9] + sf * orb[12])
+    v = (0.0, 0.0, 0.0)
+    if velocity:
+        vfac = n * a * a
+        vs = -vfac * s / r
+        vc = vfac * sq * c / r
+        v = (vs * orb[7] + vc * orb[10], vs * orb[8] + vc * orb[11], vs * orb[9] + vc * orb[12])
+    return (E - e * s - orb[5]) / n, rr / n, r, xhat, v
+
+
+@jit
+def anomalies_at(t, orb):
+    """The eccentric anomalies ``E (N,)`` (rad, unreduced: continuous in time) of the times
+    ``t (N,)``, each by a cold solve (so each is independent of the others)."""
+    out = np.empty(t.shape[0])
+    for i in range(t.shape[0]):
+        out[i] = solve_kepler(orb[5] + orb[6] * t[i], orb[1])
+    return out
+
+
+@jit
+def times_at(E, orb):
+    """The times ``t (N,)`` of the eccentric anomalies ``E (N,)`` (:func:`kepler_anomaly`'s
+    ``t``)."""
+    out = np.empty(E.shape[0])
+    for i in range(E.shape[0]):
+        out[i] = (E[i] - orb[1] * math.sin(E[i]) - orb[5]) / orb[6]
+    return out
+
+
 @jit
 def kepler_many(t, orb, gm):
     """The Keplerian orbit at the times ``t`` (array, any order; warm-started in sequence).

@@ -26,6 +26,8 @@ none                   0     (a model without orbit-driven terms)
 Keplerian              1     the ``orb`` vector of :mod:`orbatt.core.kepler` (15 entries)
 sampled                2     ``[t_first, t_last]``; table = samples ``[t, x, y, z, vx, vy, vz,
                              ax, ay, az]`` of :mod:`orbatt.core.sampled` (quintic Hermite)
+Keplerian, in the      3     as Keplerian; the independent variable of the step loops is the
+eccentric anomaly            eccentric anomaly ``E`` instead of the time (:func:`orbit_at`)
 =====================  ====  =====================================================================
 
 =====================  ====  =====================================================================
@@ -59,6 +61,16 @@ Conservative terms give the tangential gradient of their potential (``DESIGN.md`
 sum starts from the first term's value (not from zero), so a model of one term gives exactly
 the numbers of that term alone.
 
+**The eccentric anomaly as the independent variable.** With the orbit kind
+:data:`ORBIT_KEPLER_ANOMALY` the right-hand sides (:func:`orbatt.core.hamiltonian.rhs`,
+``rhs_lanes``, :func:`orbatt.core.gyrostat.rhs_extended`) take ``s = E`` (rad, unreduced) in
+place of ``t`` and return ``dy/dE = dt/dE dy/dt`` with ``dt/dE = (1 - e cos E) / n``
+(Sundman's transformation): the orbit is then closed-form at every stage
+(:func:`orbatt.core.kepler.kepler_anomaly`), with no Kepler solve, and the terms that read the
+time get ``t(E) = (E - e sin E - M0) / n``. The Python drivers map the output times to
+anomalies once (``orbatt.methods.dop853``). The evaluation kernels (:func:`gradient`,
+:func:`evaluate_many`) take the time, with the Keplerian kind.
+
 The older kernel specification of a potential, ``(kind, params, table)`` with the kinds of
 :mod:`orbatt.core.potentials`, converts with :func:`from_spec`.
 """
@@ -72,13 +84,14 @@ from ._jit import jit, jit_inline
 from . import environment as env
 from . import potentials as pot
 from . import torques as trq
-from .kepler import ORB_SIZE, kepler_radial, kepler_state
+from .kepler import ORB_SIZE, kepler_anomaly, kepler_radial, kepler_state
 from .sampled import TABLE_COLUMNS, sampled_radial, sampled_state
 
 # orbit kinds (row 0)
 ORBIT_NONE = 0
 ORBIT_KEPLER = 1
 ORBIT_SAMPLED = 2
+ORBIT_KEPLER_ANOMALY = 3
 # term kinds (rows 1..n)
 HEAVY_TOP = 1
 GRAVITY_GRADIENT = 2
@@ -119,6 +132,17 @@ SHADOW_NONE, SHADOW_CYLINDRICAL, SHADOW_CONICAL = 0, 1, 2
 
 # ---------------------------------------------------------------------------------------
 # Kernels
+
+
+@jit_inline
+def orbit_at(s, terms, params, table, work):
+    """``(t, dt/ds, r, xhat, v)`` at the step loops' independent variable ``s``: the
+    eccentric anomaly for :data:`ORBIT_KEPLER_ANOMALY` (:func:`orbatt.core.kepler.kepler_anomaly`),
+    else the time itself (``t = s``, ``dt/ds = 1``, and :func:`orbit_radial`)."""
+    if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
+        return kepler_anomaly(s, params[terms[0, P0]:terms[0, P1]], (terms[0, FLAGS] & NEEDS_VELOCITY) != 0)
+    r, xhat, v = orbit_radial(s, terms, params, table, work)
+    return s, 1.0, r, xhat, v
 
 
 @jit_inline
@@ -263,6 +287,17 @@ def gradient(t, q, inertia, terms, params, table, work):
         r, xhat, v = orbit_radial(t, terms, params, table, work)
         return terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
+
+
+@jit_inline
+def gradient_at(s, q, inertia, terms, params, table, work):
+    """``(dt/ds, G)``: :func:`gradient`'s ``G`` at the step loops' independent variable ``s``
+    (:func:`orbit_at`) and the rate ``dt/ds`` (1 when ``s`` is the time)."""
+    if terms.shape[0] > 1:
+        t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
+        _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
+        return dtds, G
+    return 1.0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit_inline

@@ -7,10 +7,12 @@ import numpy as np
 
 from ..core import dop853 as kd
 from ..core import dop853_lanes as kdl
+from ..core import kepler as kk
 from ..core import model as km
 from ..core import potentials as kp
 from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
+from .problem import KernelSpec
 
 __all__ = ["DOP853", "DOP853Lanes"]
 
@@ -27,7 +29,9 @@ class DOP853(Method):
     order = 8
     adaptive = True
     extended = True
-    options = {"max_step": "largest step allowed (time unit of the body); default no limit"}
+    options = {"max_step": "largest step allowed (time unit of the body); default no limit",
+               "independent_variable": "'auto' (default: the eccentric anomaly on a Keplerian orbit, else the "
+                                       "time), 'eccentric-anomaly' or 'time'"}
     description = "compiled adaptive Dormand-Prince 8(5,3), Hairer's step-size control"
 
     def __init__(self, **kw):
@@ -40,6 +44,53 @@ class DOP853(Method):
         if not ms > 0:
             raise InputError(f"max_step: {ms!r} must be positive")
         self.max_step = ms
+        iv = self.opts.pop("independent_variable", "auto")
+        if iv not in INDEPENDENT_VARIABLES:
+            raise InputError(f"independent_variable: {iv!r} is not one of "
+                             f"{', '.join(map(repr, INDEPENDENT_VARIABLES))}; give e.g. independent_variable = 'auto'")
+        self.independent = iv
+        self.anomaly = None
+
+    def settings(self):
+        s = super().settings()
+        s["independent_variable"] = "eccentric-anomaly" if self.anomaly is not None else "time"
+        return s
+
+    def _independent_variable(self, problem):
+        """Choose the independent variable (the option ``independent_variable``) once the
+        output times ``self.t_k`` are known; for the eccentric anomaly, map them and
+        ``max_step`` to it (:class:`EccentricAnomaly`). Returns the model the loops take."""
+        self.anomaly = None
+        kernel = problem.kernel
+        row = kernel.terms[0]
+        keplerian = int(row[km.KIND]) == km.ORBIT_KEPLER and row[km.P1] - row[km.P0] >= kk.ORB_SIZE
+        if self.independent == "time" or (self.independent == "auto" and not keplerian):
+            return kernel
+        if not keplerian:
+            raise InputError("independent_variable: 'eccentric-anomaly' needs a Keplerian orbit (this model has "
+                             "none, or a sampled one); give independent_variable = 'auto' or 'time'")
+        an = EccentricAnomaly(kernel, problem.t0)
+        s_k = an.of(self.t_k)
+        if s_k.size and not (s_k[0] > an.s0 and np.all(s_k[1:] > s_k[:-1])):
+            if self.independent == "auto":  # outputs closer than the anomaly resolves: stay in time
+                return kernel
+            raise InputError("independent_variable: the output times are too close together to be told apart in "
+                             "the eccentric anomaly; give independent_variable = 'time'")
+        self.anomaly = an
+        self.t_k = s_k
+        self.max_step = an.max_step(self.max_step)
+        return an.kernel
+
+    def _start_states(self, st):
+        """The start and the first step of the integrator states ``st`` in the independent
+        variable."""
+        st[:, kd.ST_T] = self.p.t0 if self.anomaly is None else self.anomaly.s0
+        if self.step is not None:
+            st[:, kd.ST_H] = self.step if self.anomaly is None else self.anomaly.first_step(self.step)
+
+    def _time(self, s):
+        """The time of the independent variable's value ``s`` (float)."""
+        return float(s) if self.anomaly is None else float(self.anomaly.times(np.array([float(s)]))[0])
 
     def start(self, problem):
         super().start(problem)
@@ -52,14 +103,13 @@ class DOP853(Method):
         self.one, self.batch = ((kd.advance_wide, kd.advance_batch_wide) if extended else
                                 (kd.advance, kd.advance_batch))
         self.ST, self.CNT, self.F0 = kd.new_state(E, width)
-        self.ST[:, kd.ST_T] = p.t0
-        if self.step is not None:
-            self.ST[:, kd.ST_H] = self.step
         self.WORK = kp.new_work(E)
         self.status = np.full(E, kd.PAUSED, dtype=np.int64)
         # kernel output times: those after t0 (outputs at t0 are the initial state)
         self.n0 = int(np.searchsorted(p.t_out, p.t0, side="right"))
         self.t_k = np.ascontiguousarray(p.t_out[self.n0:])
+        self.kernel = self._independent_variable(p)
+        self._start_states(self.ST)
         if p.step_ends:
             self.rec_t = np.empty(256)
             self.rec_y = np.empty((256, width))
@@ -75,7 +125,7 @@ class DOP853(Method):
         if p.step_ends:
             while True:
                 st = self.one(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.rec_t, self.rec_y,
-                                True, p.inertia[0], *p.kernel, self.WORK[0], self.rtol, self.atol,
+                                True, p.inertia[0], *self.kernel, self.WORK[0], self.rtol, self.atol,
                                 self.max_step, self.max_steps, budget)
                 if st != kd.BUFFER_FULL:
                     break
@@ -85,15 +135,15 @@ class DOP853(Method):
             self.status[0] = st
         elif p.members == 1 and not p.ensemble:
             self.status[0] = self.one(self.Y[0], self.ST[0], self.CNT[0], self.F0[0], self.t_k, self.t_k,
-                                        self.out[0], False, p.inertia[0], *p.kernel, self.WORK[0],
+                                        self.out[0], False, p.inertia[0], *self.kernel, self.WORK[0],
                                         self.rtol, self.atol, self.max_step, self.max_steps, budget)
         else:
             self.batch(self.Y, self.ST, self.CNT, self.F0, self.t_k, self.out, self.status, p.inertia,
-                             *p.kernel, self.WORK, self.rtol, self.atol, self.max_step, self.max_steps, budget)
+                             *self.kernel, self.WORK, self.rtol, self.atol, self.max_step, self.max_steps, budget)
         return self.check_status(self.status)
 
     def failure_point(self, i):
-        return float(self.ST[i, kd.ST_T]), i
+        return self._time(self.ST[i, kd.ST_T]), i
 
     def _grid_outputs(self, counters):
         p = self.p
@@ -105,7 +155,12 @@ class DOP853(Method):
         p = self.p
         if p.step_ends:
             n = int(self.CNT[0, kd.CNT_NREC])
-            t = np.concatenate([[p.t0], self.rec_t[:n]])
+            rec = self.rec_t[:n]
+            if self.anomaly is not None:  # the step ends' times; the last lands on t_end itself
+                rec = self.anomaly.times(rec)
+                if n and self.CNT[0, kd.CNT_IOUT] >= self.t_k.shape[0]:
+                    rec[-1] = p.t_out[-1]
+            t = np.concatenate([[p.t0], rec])
             Y = np.concatenate([p.y0[:1, None, :], self.rec_y[None, :n]], axis=1)
             return t, Y
         return self._grid_outputs(self.CNT)
@@ -114,7 +169,7 @@ class DOP853(Method):
         return count_totals(self.CNT, _COUNTS)
 
     def time_reached(self):
-        return float(self.ST[:, kd.ST_T].min())
+        return self._time(self.ST[:, kd.ST_T].min())
 
 
 @register
@@ -124,6 +179,7 @@ class DOP853Lanes(DOP853):
     name = "dop853-lanes"
     extended = False
     options = {"max_step": DOP853.options["max_step"],
+               "independent_variable": DOP853.options["independent_variable"],
                "lanes": "members per lockstep group (default 32)"}
     description = ("compiled DOP853 for ensembles: groups of members share the step size and the orbit "
                    "evaluation, vectorized over members (results agree with one-by-one runs to the tolerance, "
@@ -142,9 +198,7 @@ class DOP853Lanes(DOP853):
         super().start(problem)
         G = (problem.members + self.lanes - 1) // self.lanes
         self.GST, self.GCNT, _ = kd.new_state(G)
-        self.GST[:, kd.ST_T] = problem.t0
-        if self.step is not None:
-            self.GST[:, kd.ST_H] = self.step
+        self._start_states(self.GST)
         self.GWORK = kp.new_work(G)
         self.gstatus = np.full(G, kd.PAUSED, dtype=np.int64)
 
@@ -153,14 +207,14 @@ class DOP853Lanes(DOP853):
         if self.t_k.shape[0] == 0:
             return True
         kdl.advance_lanes(self.Y, self.GST, self.GCNT, self.F0, self.t_k, self.out, self.gstatus, p.inertia,
-                         *p.kernel, self.GWORK, self.lanes, self.rtol, self.atol, self.max_step,
+                         *self.kernel, self.GWORK, self.lanes, self.rtol, self.atol, self.max_step,
                          self.max_steps, budget_limit(budget))
         return self.check_status(self.gstatus)
 
     def failure_point(self, g):
         # the kernel stores the first failing lane + 1 above the flag bits of CNT_FLAGS
         lane = int(self.GCNT[g, kd.CNT_FLAGS] >> kd.BAD_LANE_SHIFT) - 1
-        return float(self.GST[g, kd.ST_T]), g * self.lanes + max(lane, 0)
+        return self._time(self.GST[g, kd.ST_T]), g * self.lanes + max(lane, 0)
 
     def outputs(self):
         return self._grid_outputs(self.GCNT)
@@ -171,9 +225,57 @@ class DOP853Lanes(DOP853):
         return s
 
     def time_reached(self):
-        return float(self.GST[:, kd.ST_T].min())
+        return self._time(self.GST[:, kd.ST_T].min())
 
     def settings(self):
         s = super().settings()
         s["lanes"] = self.lanes
         return s
+
+
+#: the values of the option ``independent_variable``
+INDEPENDENT_VARIABLES = ("auto", "eccentric-anomaly", "time")
+
+
+class EccentricAnomaly:
+    """The eccentric anomaly ``E`` as the step loops' independent variable on a Keplerian
+    orbit (Sundman's transformation ``dt = (1 - e cos E) / n dE``; the kernels' orbit kind
+    ``ORBIT_KEPLER_ANOMALY`` of :mod:`orbatt.core.model`): the orbit is closed-form at every
+    stage, with no Kepler solve. Times map to anomalies by one Kepler solve each
+    (:func:`orbatt.core.kepler.anomalies_at`, unreduced: continuous over revolutions), and
+    back in closed form.
+
+    Parameters
+    ----------
+    kernel : KernelSpec
+        The model, its orbit of kind ``ORBIT_KEPLER`` (the ``orb`` vector of
+        :mod:`orbatt.core.kepler`, the body's time unit).
+    t0 : float
+        The start time (the body's time unit).
+    """
+
+    def __init__(self, kernel, t0):
+        row = kernel.terms[0]
+        self.orb = np.ascontiguousarray(kernel.params[row[km.P0]:row[km.P1]])
+        self.e = float(self.orb[1])
+        self.n = float(self.orb[6])
+        terms = kernel.terms.copy()
+        terms[0, km.KIND] = km.ORBIT_KEPLER_ANOMALY
+        self.kernel = KernelSpec(terms, kernel.params, kernel.table)
+        self.s0 = float(self.of(np.array([float(t0)]))[0])
+
+    def of(self, t):
+        """The eccentric anomalies (rad) of the times ``t`` (array)."""
+        return kk.anomalies_at(np.ascontiguousarray(t, dtype=np.float64), self.orb)
+
+    def times(self, s):
+        """The times of the eccentric anomalies ``s`` (array, rad)."""
+        return kk.times_at(np.ascontiguousarray(s, dtype=np.float64), self.orb)
+
+    def max_step(self, max_step):
+        """A step bound in time as one in the anomaly: ``dt/dE <= (1 + e) / n`` everywhere."""
+        return max_step * self.n / (1.0 + self.e) if np.isfinite(max_step) else max_step
+
+    def first_step(self, step):
+        """A first step ``step`` in time as one in the anomaly, at the start."""
+        return step * self.n / (1.0 - self.e * np.cos(self.s0))
