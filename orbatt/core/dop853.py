@@ -18,7 +18,9 @@ a small satellite and ~1e17 for a moon), new step
 ``h / clip(err^(1/8) / facold^0.04 / 0.9, 1/6, 1/0.333)`` (Hairer's PI control with
 ``beta = 0.04``: measured 2x fewer rejected steps than ``beta = 0``, same work-precision), no
 increase right after a rejection. A non-finite error estimate rejects the step with
-``h / 10``; a step size below 10 ulps of the time span ends the run (:data:`NONFINITE` if the
+``h / 10``; a step size below 10 ulps of the time span (or below the floor ``st[ST_HMIN]``
+the driver may set: the eccentric-anomaly form of :mod:`orbatt.methods.dop853` maps the time
+form's floor to the anomaly at periapsis) ends the run (:data:`NONFINITE` if the
 last failure was non-finite, else :data:`STEP_TOO_SMALL`). The controller, the landing on
 output times and Hairer's initial step are inline helpers shared by the single and the lane
 loops.
@@ -54,8 +56,8 @@ from .hamiltonian import rhs, rhs_inline
 #: flag names of :mod:`orbatt.core._jit`
 __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
            "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
-           "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_SIZE", "CNT_STEPS", "CNT_REJECTED",
-           "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
+           "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE", "CNT_STEPS",
+           "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
 
 # Step-size controller (Hairer's defaults for dop853): safety, bounds on h_new / h
 SAFETY = 0.9
@@ -71,7 +73,8 @@ LAND_MARGIN = 1.01
 ST_T = 0          # current time
 ST_H = 1          # step size to try next (0: choose one, Hairer's hinit)
 ST_FACOLD = 2     # previous error (the PI controller's memory, exponent BETA)
-ST_SIZE = 3
+ST_HMIN = 3       # a floor on the step size set by the driver (0: none; see the module docstring)
+ST_SIZE = 4
 # ``cnt`` (int64):
 CNT_STEPS = 0     # accepted steps
 CNT_REJECTED = 1  # rejected steps (error too large or non-finite)
@@ -364,7 +367,7 @@ def _advance_of(width, extended):
         attempts = 0
         # step-size floor: 10 ulps of the largest time involved (Hairer's test uses |t| only,
         # which lets a run starting at t = 0 crawl with steps of 1e-300)
-        hmin = 10.0 * EPS * max(abs(t), abs(t_out[nout - 1]))
+        hmin = max(st[ST_HMIN], 10.0 * EPS * max(abs(t), abs(t_out[nout - 1])))
         aQ = atol * momentum_scale(inertia)
         cap = rec_t.shape[0]
         while i_out < nout:

@@ -18,7 +18,7 @@ import numpy as np
 
 from ._jit import (BAD_LANE_SHIFT, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, NDIM, borrow,
                    borrow_model, jit, jit_parallel, keepalive)
-from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, ST_FACOLD, ST_H, ST_T, accept_step, begin_attempt, controller,
+from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, ST_FACOLD, ST_H, ST_HMIN, ST_T, accept_step, begin_attempt, controller,
                      error_norm, hinit_der2, hinit_guess, hinit_norms, hinit_refine, momentum_scale, reject_nonfinite,
                      reject_step)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES
@@ -100,7 +100,7 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
             h = 1e-6 * max(1.0, abs(t_out[nout - 1] - t))
     reject = (flags & FLAG_REJECTED) != 0
     attempts = 0
-    hmin = 10.0 * EPS * max(abs(t), abs(t_out[nout - 1]))
+    hmin = max(st[ST_HMIN], 10.0 * EPS * max(abs(t), abs(t_out[nout - 1])))
     bad_lane = -1
     while i_out < nout:
         status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out, hmin,
