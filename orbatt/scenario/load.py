@@ -77,7 +77,8 @@ class Scenario:
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
         check_work(ctx, self.t_end, period, self.state0)
         self.method = spec.integration["method"]
-        self.settings = {k: spec.integration[k] for k in ("rtol", "atol") if k in spec.integration}
+        self.settings = {k: spec.integration[k] for k in ("rtol", "atol", "independent_variable")
+                         if k in spec.integration}
         if "step" in spec.integration:
             kind, value = spec.integration["step"]
             self.settings["step"] = value * period if kind == "orbits" else value

@@ -22,7 +22,7 @@ dimensional quantities is refused naming the first plain key)::
     [orbit]       provider = "kepler" | "rebound"; central_body = "earth" | gm = "..."
                   a, e, i, raan, argp, and one of true_anomaly | mean_anomaly
                   epoch (ISO UTC); rebound: perturbations = ["j2", "moon", "sun"], integrator
-    [integration] method, rtol, atol | step, t_end, output_step
+    [integration] method, rtol, atol | step, t_end, output_step, independent_variable
                   (times: a time, a plain number if dimensionless, or "N orbits")
     [sweep]       optional: parameters varied over many cases, run by ``orbatt sweep``
                   (schema: :mod:`orbatt.scenario.sweep_schema`); ``orbatt run`` runs the nominal case
@@ -74,6 +74,7 @@ from .sweep_schema import SweepSpec, parse_sweep_table
 from .control_schema import CONTROL_KEYS, parse_control
 from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
+from ..methods.dop853 import INDEPENDENT_VARIABLES
 from ..methods.problem import MAX_ATOL, MAX_RTOL
 from ..orbits import R_EARTH
 
@@ -87,7 +88,7 @@ TABLES = {
     "potential": {"kind", "sign"},
     "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
               "mean_anomaly", "epoch", "perturbations", "integrator", "tle", "tle_file"},
-    "integration": {"method", "rtol", "atol", "step", "t_end", "output_step"},
+    "integration": {"method", "rtol", "atol", "step", "t_end", "output_step", "independent_variable"},
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
     "torques": TORQUE_KEYS,  # validated by parse_torques (torques_schema.py)
     "environment": ENVIRONMENT_KEYS,
@@ -223,6 +224,10 @@ atol         plain               the method's                    absolute tolera
 step         time or 'N orbits'  required by fixed-step methods  the fixed step
 t_end        time or 'N orbits'  required                        the span; outputs at k * output_step <= t_end
 output_step  time or 'N orbits'  required                        spacing of the output times
+independent_variable  text       'auto'                          DOP853's variable: 'auto' (the eccentric anomaly
+                                                                 on a Keplerian orbit, no Kepler solve per stage:
+                                                                 ~2x faster; else the time), 'eccentric-anomaly'
+                                                                 or 'time' (orbatt 0.1's numbers)
 
 [sweep]
 # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
@@ -525,6 +530,15 @@ def _parse_integration(ctx, g, dimless, orbit):
             out[k] = float(v)
     if "step" in g:
         out["step"] = parse_time(ctx, "[integration] step", g["step"], dimless, orbit)
+    if "independent_variable" in g:
+        iv = parse_choice(ctx, "[integration] independent_variable", g["independent_variable"], INDEPENDENT_VARIABLES)
+        provider = None if orbit is None else orbit["provider"]
+        if iv == "eccentric-anomaly" and provider != "kepler":
+            has = "has no orbit" if provider is None else f"has provider = {provider!r}"
+            raise ctx.error("[integration] independent_variable",
+                            f"'eccentric-anomaly' needs a Keplerian orbit ([orbit] provider = 'kepler'); this "
+                            f"scenario {has}; give independent_variable = 'auto'")
+        out["independent_variable"] = iv
     for k in ("t_end", "output_step"):
         if k not in g:
             raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")

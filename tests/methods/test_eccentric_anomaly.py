@@ -172,3 +172,42 @@ def test_kernel_model_of_the_anomaly_is_only_the_drivers():
     terms, params, table = km.from_spec(GG.kind, GG.params, GG.table)
     assert int(terms[0, km.KIND]) == km.ORBIT_KEPLER
     assert ORB.size == kepler.ORB_SIZE
+
+
+SCEN = __import__("pathlib").Path(__file__).resolve().parents[2] / "scenarios"
+
+
+@pytest.mark.parametrize("value, used", [(None, "eccentric-anomaly"), ("auto", "eccentric-anomaly"),
+                                         ("eccentric-anomaly", "eccentric-anomaly"), ("time", "time")])
+def test_scenario_key(tmp_path, value, used):
+    """``[integration] independent_variable`` reaches the integrator, and ``"time"`` gives the
+    time form's numbers exactly."""
+    import json
+    import warnings
+
+    src = (SCEN / "paper-keplerian.toml").read_text().replace('t_end = "2 orbits"', 't_end = "0.2 orbits"')
+    if value is not None:
+        src = src.replace("[integration]", f'[integration]\nindependent_variable = "{value}"')
+    p = tmp_path / "a.toml"
+    p.write_text(src)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = orbatt.load_scenario(p).run()
+        ref = orbatt.load_scenario(p).run(independent_variable=used)
+    assert json.loads(ds.attrs["method_settings"])["independent_variable"] == used
+    np.testing.assert_array_equal(ds["q"].values, ref["q"].values)
+
+
+@pytest.mark.parametrize("scenario, value, message", [
+    ("paper-keplerian", '"bogus"', "'bogus' is not one of 'auto', 'eccentric-anomaly', 'time'"),
+    ("paper-torque-free", '"eccentric-anomaly"', "'eccentric-anomaly' needs a Keplerian orbit .* has no orbit"),
+    ("sso-j2-rebound", '"eccentric-anomaly"', "'eccentric-anomaly' needs a Keplerian orbit .* provider = 'rebound'"),
+])
+def test_scenario_key_refusals(tmp_path, scenario, value, message):
+    from orbatt.scenario import ScenarioError
+
+    p = tmp_path / "a.toml"
+    p.write_text((SCEN / f"{scenario}.toml").read_text().replace(
+        "[integration]", f"[integration]\nindependent_variable = {value}"))
+    with pytest.raises(ScenarioError, match=r"\[integration\] independent_variable: " + message):
+        orbatt.load_scenario(p)
