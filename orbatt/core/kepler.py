@@ -294,11 +294,15 @@ def kepler_anomaly(E, orb, velocity):
 @jit
 def anomalies_at(t, orb):
     """The eccentric anomalies ``E (N,)`` (rad, unreduced: continuous in time) of the times
-    ``t (N,)``, each by a cold solve (so each is independent of the others)."""
+    ``t (N,)``, each by a cold solve (so each is independent of the others), and whether
+    they strictly increase."""
     out = np.empty(t.shape[0])
+    increasing = True
     for i in range(t.shape[0]):
         out[i] = solve_kepler(orb[5] + orb[6] * t[i], orb[1])
-    return out
+        if i > 0 and not out[i] > out[i - 1]:
+            increasing = False
+    return out, increasing
 
 
 @jit

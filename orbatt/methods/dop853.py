@@ -69,15 +69,14 @@ class DOP853(Method):
         if not keplerian:
             raise InputError("independent_variable: 'eccentric-anomaly' needs a Keplerian orbit (this model has "
                              "none, or a sampled one); give independent_variable = 'auto' or 'time'")
-        an = EccentricAnomaly(kernel, problem.t0)
-        s_k = an.of(self.t_k)
-        if s_k.size and not (s_k[0] > an.s0 and np.all(s_k[1:] > s_k[:-1])):
+        an = EccentricAnomaly(kernel, problem.t0, self.t_k)
+        if not an.increasing:
             if self.independent == "auto":  # outputs closer than the anomaly resolves: stay in time
                 return kernel
             raise InputError("independent_variable: the output times are too close together to be told apart in "
                              "the eccentric anomaly; give independent_variable = 'time'")
         self.anomaly = an
-        self.t_k = s_k
+        self.t_k = an.s_out
         self.max_step = an.max_step(self.max_step)
         return an.kernel
 
@@ -254,9 +253,19 @@ class EccentricAnomaly:
         :mod:`orbatt.core.kepler`, the body's time unit).
     t0 : float
         The start time (the body's time unit).
+    t_out : ndarray (N,)
+        Output times after ``t0``, increasing.
+
+    Attributes
+    ----------
+    s0, s_out : float, ndarray (N,)
+        The anomalies of ``t0`` and ``t_out`` (rad).
+    increasing : bool
+        Whether ``s0, s_out`` strictly increase (outputs closer than the anomaly resolves do
+        not).
     """
 
-    def __init__(self, kernel, t0):
+    def __init__(self, kernel, t0, t_out):
         row = kernel.terms[0]
         self.orb = np.ascontiguousarray(kernel.params[row[km.P0]:row[km.P1]])
         self.e = float(self.orb[1])
@@ -264,11 +273,9 @@ class EccentricAnomaly:
         terms = kernel.terms.copy()
         terms[0, km.KIND] = km.ORBIT_KEPLER_ANOMALY
         self.kernel = KernelSpec(terms, kernel.params, kernel.table)
-        self.s0 = float(self.of(np.array([float(t0)]))[0])
-
-    def of(self, t):
-        """The eccentric anomalies (rad) of the times ``t`` (array)."""
-        return kk.anomalies_at(np.ascontiguousarray(t, dtype=np.float64), self.orb)
+        s, self.increasing = kk.anomalies_at(np.concatenate(([float(t0)], t_out)), self.orb)
+        self.s0 = float(s[0])
+        self.s_out = s[1:]
 
     def times(self, s):
         """The times of the eccentric anomalies ``s`` (array, rad)."""

@@ -35,7 +35,9 @@ def test_orbit_in_the_anomaly_equals_the_orbit_in_time():
         orb = kepler.orbit_vector(7000.0, e, 1.1, 0.3, 2.0, 0.4, math.sqrt(398600.4418 / 7000.0**3))
         E = np.sort(rng.uniform(-20.0, 40.0, 200))
         t = kepler.times_at(E, orb)
-        np.testing.assert_allclose(kepler.anomalies_at(t, orb), E, rtol=0, atol=4e-15 * 40 / (1 - e))
+        back, increasing = kepler.anomalies_at(t, orb)
+        assert increasing
+        np.testing.assert_allclose(back, E, rtol=0, atol=4e-15 * 40 / (1 - e))
         for Ei, ti in zip(E[::10], t[::10]):
             ta, dtde, r, xhat, v = kepler.kepler_anomaly(Ei, orb, True)
             assert ta == ti
@@ -93,6 +95,26 @@ def test_step_ends_map_back_to_time(sat):
     assert tr.t.size == tr.stats["steps"] + 1
     check = orbatt.propagate(body, s0, GG, tr.t, **TIGHT, independent_variable="time")
     assert angle(tr.q, check.q).max() < 1e-10
+
+
+def test_outputs_closer_than_the_anomaly_resolves(sat):
+    """Consecutive float times far out (1e9 s: 1e6 rad of anomaly, whose ulp is 20x the
+    anomaly of one ulp of time) can map to one anomaly: ``auto`` then integrates in time,
+    ``eccentric-anomaly`` refuses."""
+    body, s0 = sat
+    t = [1e9]
+    for _ in range(200):
+        t.append(np.nextafter(t[-1], np.inf))
+    E, increasing = kepler.anomalies_at(np.array(t), ORB)
+    assert not increasing
+    tv = np.array([0.0, *t[:40]])
+    with pytest.raises(InputError, match="too close together"):
+        orbatt.propagate(body, s0, GG, tv, independent_variable="eccentric-anomaly", max_steps=1)
+    with pytest.raises(IntegrationError) as err:  # auto: the time form starts (and stops at max_steps)
+        orbatt.propagate(body, s0, GG, tv, max_steps=1)
+    assert err.value.trajectory.settings["independent_variable"] == "time"
+    tr = orbatt.propagate(body, s0, GG, [0.0, 100.0, 200.0])
+    assert tr.settings["independent_variable"] == "eccentric-anomaly"
 
 
 def test_max_step_bounds_the_time_step(sat):
