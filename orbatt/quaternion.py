@@ -48,7 +48,7 @@ def as_quaternion(q, name="q"):
     if a.ndim == 0 or a.shape[-1] != 4:
         raise InputError(f"{name}: expected an array of shape (..., 4) (scalar first "
                          f"q0, q1, q2, q3), got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise InputError(f"{name}: contains non-finite values ({a!r}); give finite numbers")
     return a
 
@@ -117,7 +117,7 @@ def normalize(q):
     """``q / |q|``; raises :class:`InputError` for a zero or non-finite quaternion."""
     q = as_quaternion(q)
     n = norm(q)
-    if np.any(n == 0.0):
+    if (n == 0.0).any():
         raise InputError("q: the zero quaternion has no direction; give a nonzero quaternion")
     return q / n[..., None]
 
