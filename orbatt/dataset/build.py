@@ -51,6 +51,11 @@ AXIS_INDEX = np.array([1, 2, 3])
 AXIS_LABELS = ["x", "y", "z"]
 EULER_313_LABELS = ["phi", "theta", "psi"]
 EULER_321_LABELS = ["roll", "pitch", "yaw"]
+# the arrays of the label and position coordinates, copied into every Dataset (a copy costs
+# less than making them from the lists)
+_QUAT_LABELS, _AXIS_LABELS = np.array(QUAT_LABELS), np.array(AXIS_LABELS)
+_EULER_313_LABELS, _EULER_321_LABELS = np.array(EULER_313_LABELS), np.array(EULER_321_LABELS)
+_ARANGE3 = np.arange(3)
 #: the string coordinates beside the numeric dimension coordinates
 LABEL_COORDS = ("quat_label", "axis_label", "euler_313_label", "euler_321_label")
 
@@ -291,11 +296,11 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         "time": Var(("time",), t, time_attrs),
         "quat": _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
-        "quat_label": Var(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
+        "quat_label": Var(("quat",), _QUAT_LABELS.copy(), {"long_name": "quaternion component name"}),
         "axis": _var(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
-        "axis_label": Var(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
-        "euler_313_angle": _var(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
-        "euler_313_label": Var(("euler_313_angle",), np.array(EULER_313_LABELS),
+        "axis_label": Var(("axis",), _AXIS_LABELS.copy(), {"long_name": "vector component name"}),
+        "euler_313_angle": _var(("euler_313_angle",), _ARANGE3.copy(), "1", "position in (phi, theta, psi)"),
+        "euler_313_label": Var(("euler_313_angle",), _EULER_313_LABELS.copy(),
                                        {"long_name": "3-1-3 Euler angle name"}),
     }
     if ens:
@@ -332,8 +337,8 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         pos, vel = _plain(pos, u.km), _plain(vel, _KM_PER_S)
         q_orb = qt.mul(qt.conj(p), q)
         roll, pitch, yaw = lvlh_angles(q_orb)
-        coords["euler_321_angle"] = _var(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
-        coords["euler_321_label"] = Var(("euler_321_angle",), np.array(EULER_321_LABELS),
+        coords["euler_321_angle"] = _var(("euler_321_angle",), _ARANGE3.copy(), "1", "position in (roll, pitch, yaw)")
+        coords["euler_321_label"] = Var(("euler_321_angle",), _EULER_321_LABELS.copy(),
                                                 {"long_name": "3-2-1 Euler angle name"})
         data.update({
             "r": _var(("time",), r, U["length"], "orbit radius"),
