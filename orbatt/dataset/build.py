@@ -67,21 +67,27 @@ FRAMES = ("S: inertial (space) frame; B: body principal axes; O: orbital frame (
           "(Hamilton product, scalar first).")
 
 
+def _json_default(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, u.Quantity):
+        return str(x)
+    if hasattr(x, "isot"):
+        return x.isot
+    return str(x)
+
+
+#: what ``json.dumps(obj, default=_json_default, sort_keys=True)`` makes for every call,
+#: made once (an encoder keeps no state between calls)
+_JSON = json.JSONEncoder(default=_json_default, sort_keys=True)
+
+
 def to_json(obj) -> str:
     """JSON text of ``obj`` (keys sorted; numpy scalars and arrays, Quantities and Times
     written as numbers, lists and strings; ``None`` as ``{}``)."""
-    def default(x):
-        if isinstance(x, np.generic):
-            return x.item()
-        if isinstance(x, np.ndarray):
-            return x.tolist()
-        if isinstance(x, u.Quantity):
-            return str(x)
-        if hasattr(x, "isot"):
-            return x.isot
-        return str(x)
-
-    return json.dumps(obj if obj is not None else {}, default=default, sort_keys=True)
+    return _JSON.encode(obj if obj is not None else {})
 
 
 def utc_now() -> str:
