@@ -16,6 +16,8 @@ TRIANGLE_TOLERANCE = 1e-12
 
 
 def _violates(inertia, i, j, k):
+    if type(inertia) is list:  # one body's moments as floats (check_triangle)
+        return inertia[i] + inertia[j] < inertia[k] * (1.0 - TRIANGLE_TOLERANCE)
     return inertia[..., i] + inertia[..., j] < inertia[..., k] * (1.0 - TRIANGLE_TOLERANCE)
 
 
@@ -44,8 +46,10 @@ def check_triangle(inertia):
     """Raise :class:`InputError` naming the first triangle inequality ``Ii + Ij >= Ik`` that
     the principal moments ``inertia (3,)`` violate (see :func:`triangle_violation`)."""
     inertia = np.asarray(inertia, dtype=np.float64)
+    # one body: the same comparisons on Python floats (numpy scalars cost ~1 us an operation)
+    moments = inertia.tolist() if inertia.shape == (3,) else inertia
     for i, j, k, names in TRIANGLE:
-        if _violates(inertia, i, j, k):
+        if _violates(moments, i, j, k):
             raise InputError(f"inertia: {inertia.tolist()} violates the triangle inequality {names}; "
                              "no rigid body has these principal moments")
 
@@ -115,7 +119,7 @@ class RigidBody:
         value = U.strip(inertia, U.INERTIA, "inertia", allow_plain=True)
         if value.shape != (3,):
             raise InputError(f"inertia: expected three principal moments [I1, I2, I3], got shape {value.shape}")
-        if np.any(value <= 0):
+        if (value <= 0).any():
             raise InputError(f"inertia: moments must be positive, got {value.tolist()}")
         check_triangle(value)
         self._value = value

@@ -7,6 +7,9 @@ tangential gradient ``dU/dq`` and the body-frame torque for arrays of times and 
 """
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+
 import numpy as np
 
 from . import units as U
@@ -21,6 +24,41 @@ def _read_only(a):
     """``a`` with its ``writeable`` flag cleared (a potential's parameters are fixed)."""
     a.flags.writeable = False
     return a
+
+
+#: models of small kernel specifications by value, most recently used last
+#: (:func:`_model_of`): a study building the same potential again (``load_scenario(path)``
+#: in a loop) skips :func:`orbatt.core.model.from_spec` (~30 us)
+_MODELS: OrderedDict = OrderedDict()
+_MODELS_LOCK = threading.Lock()
+#: most models kept; specifications with larger tables (sampled orbits) are not kept
+MODEL_CACHE_SIZE = 64
+_MODEL_CACHE_MAX_TABLE = 4096
+
+
+def _model_of(kind, params, table):
+    """``km.from_spec(kind, params, table)``, remembered by the values of small specifications;
+    every call returns fresh arrays (the caller may change them)."""
+    try:
+        pv = np.asarray(params, dtype=np.float64)
+        tv = np.asarray(table, dtype=np.float64)
+        key = (int(kind), pv.shape, pv.tobytes(), tv.shape, tv.tobytes()) if tv.size <= _MODEL_CACHE_MAX_TABLE else None
+    except (TypeError, ValueError):  # from_spec reports a bad specification
+        key = None
+    if key is None:
+        return km.from_spec(kind, params, table)
+    with _MODELS_LOCK:
+        model = _MODELS.get(key)
+        if model is not None:
+            _MODELS.move_to_end(key)
+    if model is None:
+        model = km.from_spec(kind, params, table)
+        with _MODELS_LOCK:
+            _MODELS[key] = tuple(a.copy() for a in model)
+            while len(_MODELS) > MODEL_CACHE_SIZE:
+                _MODELS.popitem(last=False)
+        return model
+    return tuple(a.copy() for a in model)
 
 
 class Potential:
@@ -48,7 +86,13 @@ class Potential:
         dimensional bodies).
         """
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
-        t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
+        if type(t) is np.ndarray and t.dtype == np.float64 and t.shape == q.shape[:1] and t.flags.c_contiguous:
+            # what the line below makes of such times (a run's outputs), a read-only view (one
+            # numba specialization), without np.broadcast_to's ~3 us
+            t = t.view()
+            t.flags.writeable = False
+        else:
+            t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
         return km.evaluate_many(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
 
     def kernel_model(self):
@@ -68,7 +112,7 @@ class Potential:
         """Build the compiled model ``(terms, params, table)`` from the kernel specification
         (:func:`orbatt.core.model.from_spec`); subclasses with more terms override it. Use
         :meth:`kernel_model`, which builds it once."""
-        return km.from_spec(self.kind, self.params, self.table)
+        return _model_of(self.kind, self.params, self.table)
 
     def describe(self) -> dict:
         """Plain description (strings and numbers) for Dataset attributes and scenarios."""

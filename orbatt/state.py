@@ -25,10 +25,10 @@ TANGENT_TOLERANCE = 1e-6
 def unit_quaternion(q, name="q"):
     q = qt.as_quaternion(q, name)
     n = qt.norm(q)
-    if np.any(n == 0.0):
+    if (n == 0.0).any():
         raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
     bad = np.abs(n - 1.0) > UNIT_TOLERANCE
-    if np.any(bad):
+    if bad.any():
         raise InputError(f"{name}: |q| = {float(np.asarray(n)[bad].ravel()[0]):.10g} is not 1 (tolerance "
                          f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
     return q / n[..., None]
@@ -56,14 +56,15 @@ class State:
         self.q = unit_quaternion(q)
         Qv = U.strip(Q, body.momentum_unit, "Q", allow_plain=True)
         Qv = qt.as_quaternion(Qv, "Q")
-        try:
-            np.broadcast_shapes(self.q.shape, Qv.shape)
-        except ValueError:
-            raise InputError(f"Q: shape {Qv.shape} does not match q's {self.q.shape}") from None
+        if Qv.shape != self.q.shape:
+            try:
+                np.broadcast_shapes(self.q.shape, Qv.shape)
+            except ValueError:
+                raise InputError(f"Q: shape {Qv.shape} does not match q's {self.q.shape}") from None
         qQ = qt.dot(self.q, Qv)
         scale = qt.norm(Qv)
         bad = np.abs(qQ) > TANGENT_TOLERANCE * scale
-        if np.any(bad):
+        if bad.any():
             raise InputError(f"Q: q.Q = {float(np.asarray(qQ)[bad].ravel()[0]):.6g} is not ~0 (|Q| = "
                              f"{float(np.asarray(scale)[bad].ravel()[0]):.6g}); Q must be tangent to the unit sphere "
                              "at q (Q = 2 q g): build it with State.from_omega or State.from_momentum")

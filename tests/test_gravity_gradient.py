@@ -152,6 +152,20 @@ def test_kernel_model_is_built_once_and_handed_out_as_copies(paper):
         gg.params[0] = 1.0
 
 
+def test_models_of_equal_potentials_are_remembered_but_never_shared(paper):
+    """Two potentials with the same kernel specification (a scenario loaded twice) get the
+    model from_spec builds, each in arrays of its own: changing one changes no other."""
+    first, second = GravityGradient(paper).build_model(), GravityGradient(paper).build_model()
+    gg = GravityGradient(paper)
+    expected = km.from_spec(gg.kind, gg.params, gg.table)
+    for a, b, c in zip(first, second, expected):
+        assert a is not b and a.dtype == c.dtype and a.flags.c_contiguous and a.flags.writeable
+        assert a.tobytes() == b.tobytes() == c.tobytes()
+        a[...] = 0
+    again = GravityGradient(paper).build_model()
+    assert all(a.tobytes() == c.tobytes() for a, c in zip(again, expected))
+
+
 # ---- the paper's Sect. 6.2 case against the classical model --------------------------------
 @nb.njit(cache=False)
 def _classical_rhs(t, y, inertia, gm, orb, work):

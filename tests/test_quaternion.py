@@ -229,3 +229,19 @@ def test_euler_angles_of_a_row_do_not_depend_on_singular_rows_beside_it():
             for a, m in zip(alone, mixed):
                 assert np.array_equal(a.view(np.int64), m[:-1].view(np.int64))
             assert np.isfinite(np.array(mixed)).all()
+
+
+def test_mul_of_few_quaternions_is_bitwise_the_product_of_many():
+    """mul computes a few quaternions as whole arrays and many component by component: the
+    same terms in the same order, so the same bits (signed zeros, overflow and NaN included)."""
+    rng = np.random.default_rng(7)
+    special = np.array([0.0, -0.0, 1.0, -1.0, 0.5, 1e-300, -1e300, np.inf, np.nan])
+    many_a = np.concatenate([rng.standard_normal((200, 4)), rng.choice(special, (200, 4))])
+    many_b = np.concatenate([rng.standard_normal((200, 4)), rng.choice(special, (200, 4))])
+    with np.errstate(all="ignore"):
+        many = qt.mul(many_a, many_b)
+        for k in range(0, 400, 2):
+            few = qt.mul(many_a[k:k + 2], many_b[k:k + 2])
+            assert few.tobytes() == many[k:k + 2].tobytes()
+        # broadcasting: one quaternion against a few
+        assert qt.mul(many_a[0], many_b[:3]).tobytes() == qt.mul(np.tile(many_a[0], (400, 1)), many_b)[:3].tobytes()

@@ -10,6 +10,8 @@ integrated. Units: the spellings of :data:`orbatt.units.DIMENSIONAL_UNITS` (kg, 
 from __future__ import annotations
 
 import json
+import math
+import time
 from datetime import datetime, timezone
 from typing import TYPE_CHECKING
 
@@ -51,6 +53,11 @@ AXIS_INDEX = np.array([1, 2, 3])
 AXIS_LABELS = ["x", "y", "z"]
 EULER_313_LABELS = ["phi", "theta", "psi"]
 EULER_321_LABELS = ["roll", "pitch", "yaw"]
+# the arrays of the label and position coordinates, copied into every Dataset (a copy costs
+# less than making them from the lists)
+_QUAT_LABELS, _AXIS_LABELS = np.array(QUAT_LABELS), np.array(AXIS_LABELS)
+_EULER_313_LABELS, _EULER_321_LABELS = np.array(EULER_313_LABELS), np.array(EULER_321_LABELS)
+_ARANGE3 = np.arange(3)
 #: the string coordinates beside the numeric dimension coordinates
 LABEL_COORDS = ("quat_label", "axis_label", "euler_313_label", "euler_321_label")
 
@@ -62,26 +69,41 @@ FRAMES = ("S: inertial (space) frame; B: body principal axes; O: orbital frame (
           "(Hamilton product, scalar first).")
 
 
+def _json_default(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, u.Quantity):
+        return str(x)
+    if hasattr(x, "isot"):
+        return x.isot
+    return str(x)
+
+
+#: what ``json.dumps(obj, default=_json_default, sort_keys=True)`` makes for every call,
+#: made once (an encoder keeps no state between calls)
+_JSON = json.JSONEncoder(default=_json_default, sort_keys=True)
+
+
 def to_json(obj) -> str:
     """JSON text of ``obj`` (keys sorted; numpy scalars and arrays, Quantities and Times
     written as numbers, lists and strings; ``None`` as ``{}``)."""
-    def default(x):
-        if isinstance(x, np.generic):
-            return x.item()
-        if isinstance(x, np.ndarray):
-            return x.tolist()
-        if isinstance(x, u.Quantity):
-            return str(x)
-        if hasattr(x, "isot"):
-            return x.isot
-        return str(x)
-
-    return json.dumps(obj if obj is not None else {}, default=default, sort_keys=True)
+    return _JSON.encode(obj if obj is not None else {})
 
 
 def utc_now() -> str:
     """The current time, ISO 8601 UTC to the second (``date_created``, ``history``)."""
-    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    global _NOW
+    second = math.floor(time.time())
+    last = _NOW
+    if last[0] != second:  # formatted once a second (strftime costs ~2 us a run)
+        last = _NOW = (second, datetime.fromtimestamp(second, timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"))
+    return last[1]
+
+
+#: ``(second, its utc_now text)`` of the last call
+_NOW = (None, "")
 
 
 def orbatt_version() -> str:
@@ -120,6 +142,15 @@ def _plain(x, unit):
     if isinstance(x, u.Quantity):
         return np.asarray(x.to_value(unit), dtype=np.float64)
     return np.asarray(x, dtype=np.float64)
+
+
+def _columns(*arrays):
+    """``np.stack(arrays, axis=-1)`` of float64 arrays of one shape (copied into one new
+    array: a third of np.stack's cost on a few values)."""
+    out = np.empty(arrays[0].shape + (len(arrays),))
+    for k, a in enumerate(arrays):
+        out[..., k] = a
+    return out
 
 
 def _describe(obj):
@@ -278,7 +309,7 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     else:
         Upot, tau = _energy_and_torques(tr.potential, body, t, q, want_tau)
     phi, theta, psi = qt.to_euler313(q)
-    e313 = np.stack([phi, theta, psi], axis=-1)
+    e313 = _columns(phi, theta, psi)
 
     tdims = lead + ("time",)
     # a CF time coordinate with or without an epoch (the file form adds "seconds since <epoch>",
@@ -291,11 +322,11 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         "time": Var(("time",), t, time_attrs),
         "quat": _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
-        "quat_label": Var(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
+        "quat_label": Var(("quat",), _QUAT_LABELS.copy(), {"long_name": "quaternion component name"}),
         "axis": _var(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
-        "axis_label": Var(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
-        "euler_313_angle": _var(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
-        "euler_313_label": Var(("euler_313_angle",), np.array(EULER_313_LABELS),
+        "axis_label": Var(("axis",), _AXIS_LABELS.copy(), {"long_name": "vector component name"}),
+        "euler_313_angle": _var(("euler_313_angle",), _ARANGE3.copy(), "1", "position in (phi, theta, psi)"),
+        "euler_313_label": Var(("euler_313_angle",), _EULER_313_LABELS.copy(),
                                        {"long_name": "3-1-3 Euler angle name"}),
     }
     if ens:
@@ -332,8 +363,8 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         pos, vel = _plain(pos, u.km), _plain(vel, _KM_PER_S)
         q_orb = qt.mul(qt.conj(p), q)
         roll, pitch, yaw = lvlh_angles(q_orb)
-        coords["euler_321_angle"] = _var(("euler_321_angle",), np.arange(3), "1", "position in (roll, pitch, yaw)")
-        coords["euler_321_label"] = Var(("euler_321_angle",), np.array(EULER_321_LABELS),
+        coords["euler_321_angle"] = _var(("euler_321_angle",), _ARANGE3.copy(), "1", "position in (roll, pitch, yaw)")
+        coords["euler_321_label"] = Var(("euler_321_angle",), _EULER_321_LABELS.copy(),
                                                 {"long_name": "3-2-1 Euler angle name"})
         data.update({
             "r": _var(("time",), r, U["length"], "orbit radius"),
@@ -344,7 +375,7 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
             "velocity": _var(("time", "axis"), vel, U["speed"], "velocity of the body's centre of mass", frame="S"),
             "q_orbital": _var(qv, q_orb, "1", "attitude quaternion relative to the orbital frame (p~ q)",
                               **_quat_attrs("B relative to O", "x_O = q_orbital x_B q_orbital~")),
-            "euler_321": _var(tdims + ("euler_321_angle",), np.stack([roll, pitch, yaw], axis=-1), "rad",
+            "euler_321": _var(tdims + ("euler_321_angle",), _columns(roll, pitch, yaw), "rad",
                               "roll (about along-track o2), pitch (about orbit normal o3), yaw (about radial o1) "
                               "of q_orbital: q_orbital = m q_yaw,o1 q_pitch,o3 q_roll,o2 m~ (3-2-1 sequence in "
                               "the axes (o2, o3, o1))", frames="B relative to O",

@@ -173,7 +173,7 @@ def as_times(t, name="t"):
             out = np.asarray(t, dtype=np.float64)
         except (TypeError, ValueError):
             raise InputError(f"{name}: {t!r} is not an array of times (seconds since the epoch)") from None
-        if not np.all(np.isfinite(out)):
+        if not np.isfinite(out).all():
             raise InputError(f"{name}: contains non-finite times; give finite seconds since the epoch")
     return out
 

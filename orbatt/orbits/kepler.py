@@ -281,7 +281,13 @@ class KeplerOrbit(OrbitProvider):
         si = math.sin(0.5 * self.inc)
         sp = 0.5 * (self.raan + uu)
         sm = 0.5 * (self.raan - uu)
-        return np.stack([ci * np.cos(sp), si * np.cos(sm), si * np.sin(sm), ci * np.sin(sp)], axis=-1)
+        # np.stack([...], axis=-1) of the same values, written into one array (np.stack costs more)
+        out = np.empty(sp.shape + (4,))
+        out[..., 0] = ci * np.cos(sp)
+        out[..., 1] = si * np.cos(sm)
+        out[..., 2] = si * np.sin(sm)
+        out[..., 3] = ci * np.sin(sp)
+        return out
 
     def orbital_rate(self, t):
         """Angular velocity of ``O`` relative to ``S`` in ``O`` components (rad/s):

@@ -51,13 +51,14 @@ def build_kepler_orbit(ctx, o):
     # Quantity in rad, without making and stripping four Quantities)
     kw = {o["anomaly_kind"]: float(o["anomaly"])}
     if o["central_body"] is None:
-        kw["gm"] = o["gm"] * gu
+        kw["gm"] = o["gm"] * gu if plain else u.Quantity(o["gm"], gu)  # what o["gm"] * gu makes, faster
     else:
         kw["central_body"] = o["central_body"]
     if o["epoch"] is not None:
         kw["epoch"] = o["epoch"]
     try:  # a periapsis inside the central body warns (PeriapsisWarning), as the paper's Sect. 6.2 orbit does
-        return KeplerOrbit(o["a"] * lu, o["e"], float(o["i"]), float(o["raan"]), float(o["argp"]), **kw)
+        a = o["a"] * lu if plain else u.Quantity(o["a"], lu)
+        return KeplerOrbit(a, o["e"], float(o["i"]), float(o["raan"]), float(o["argp"]), **kw)
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
 

@@ -10,6 +10,7 @@ from collections import OrderedDict
 from pathlib import Path
 
 import numpy as np
+from astropy import units as u
 
 from .. import units as U
 from ..body import RigidBody
@@ -57,7 +58,8 @@ class Scenario:
         self.text = spec.text
         ctx = FieldContext(str(path) if path else spec.name)
         wheels = spec.control["wheels"] if spec.control is not None else ()
-        self.body = RigidBody(spec.inertia if spec.dimensionless else spec.inertia * U.INERTIA, wheels=wheels)
+        # u.Quantity(x, unit): what x * unit makes, in half the time
+        self.body = RigidBody(spec.inertia if spec.dimensionless else u.Quantity(spec.inertia, U.INERTIA), wheels=wheels)
         self.orbit = None
         kepler = period = None
         provider = spec.orbit["provider"] if spec.orbit is not None else None
@@ -233,7 +235,14 @@ def _fresh(x):
 
 def _copy_spec(spec: Spec) -> Spec:
     """A deep copy of ``spec`` (every field)."""
+    if type(spec) is Spec and _SPEC_FIELDS == set(vars(spec)):  # a plain dataclass: its fields copied directly
+        out = object.__new__(Spec)
+        out.__dict__.update({k: _fresh(v) for k, v in vars(spec).items()})
+        return out
     return dataclasses.replace(spec, **{f.name: _fresh(getattr(spec, f.name)) for f in dataclasses.fields(spec)})
+
+
+_SPEC_FIELDS = {f.name for f in dataclasses.fields(Spec)}
 
 
 #: leading bytes of binary formats a user may pass for a scenario by mistake
