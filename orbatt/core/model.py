@@ -140,7 +140,7 @@ def orbit_at(s, terms, params, table, work):
     eccentric anomaly for :data:`ORBIT_KEPLER_ANOMALY` (:func:`orbatt.core.kepler.kepler_anomaly`),
     else the time itself (``t = s``, ``dt/ds = 1``, and :func:`orbit_radial`)."""
     if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
-        return kepler_anomaly(s, params[terms[0, P0]:terms[0, P1]], (terms[0, FLAGS] & NEEDS_VELOCITY) != 0)
+        return kepler_anomaly(s, params[terms[0, P0]:terms[0, P1]], (terms[0, FLAGS] & NEEDS_VELOCITY) != 0, work)
     r, xhat, v = orbit_radial(s, terms, params, table, work)
     return s, 1.0, r, xhat, v
 

@@ -39,7 +39,7 @@ def test_orbit_in_the_anomaly_equals_the_orbit_in_time():
         assert increasing
         np.testing.assert_allclose(back, E, rtol=0, atol=4e-15 * 40 / (1 - e))
         for Ei, ti in zip(E[::10], t[::10]):
-            ta, dtde, r, xhat, v = kepler.kepler_anomaly(Ei, orb, True)
+            ta, dtde, r, xhat, v = kepler.kepler_anomaly(Ei, orb, True, kp.new_work())
             assert ta == ti
             work = kp.new_work()
             r_t, xhat_t, v_t = kepler.kepler_state(ti, orb, work)
@@ -52,8 +52,19 @@ def test_orbit_in_the_anomaly_equals_the_orbit_in_time():
             fd = (kepler.times_at(np.array([Ei + h]), orb)[0] - kepler.times_at(np.array([Ei - h]), orb)[0]) / (2 * h)
             assert dtde == pytest.approx(fd, rel=1e-8)
             # without the velocity: the same numbers, zero velocity
-            tb, dtdeb, rb, xb, vb = kepler.kepler_anomaly(Ei, orb, False)
+            tb, dtdeb, rb, xb, vb = kepler.kepler_anomaly(Ei, orb, False, kp.new_work())
             assert (tb, dtdeb, rb, xb) == (ta, dtde, r, xhat) and vb == (0.0, 0.0, 0.0)
+            # from a base up to 0.125 rad away (sin, cos by angle addition): within 2 ulp of 1
+            for d in (-0.125, -0.01, 1e-9, 0.07, 0.125):
+                work = kp.new_work()
+                kepler.kepler_anomaly(Ei - d, orb, True, work)  # sets the base
+                assert work[0] == Ei - d
+                tc, dtdec, rc, xc, vc = kepler.kepler_anomaly(Ei, orb, True, work)
+                assert work[0] == Ei - d  # still that base
+                assert abs(tc - ta) <= 4e-16 * abs(ta) + 1e-15 / orb[6]
+                assert rc == pytest.approx(r, rel=4e-16 / (1 - e), abs=0)
+                np.testing.assert_allclose(xc, xhat, rtol=0, atol=1e-15 / (1 - e))
+                np.testing.assert_allclose(vc, v, rtol=0, atol=2e-15 / (1 - e) * np.linalg.norm(v))
 
 
 def test_anomaly_and_time_forms_agree(sat):
