@@ -86,7 +86,8 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     max_steps : int
         Limit on step attempts per member (default 1e8).
     **options
-        Method options (``max_step`` for adaptive methods, ``kinetic`` for splitting).
+        Method options (``max_step`` for adaptive methods, ``independent_variable`` for
+        ``"dop853"`` and ``"dop853-lanes"``, ``kinetic`` for splitting).
 
     Returns
     -------
