@@ -25,6 +25,14 @@ TANGENT_TOLERANCE = 1e-6
 def unit_quaternion(q, name="q"):
     q = qt.as_quaternion(q, name)
     n = qt.norm(q)
+    if q.ndim == 1:  # one quaternion: the checks below on a float (numpy's calls cost ~1 us each)
+        nf = float(n)
+        if nf == 0.0:
+            raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
+        if abs(nf - 1.0) > UNIT_TOLERANCE:
+            raise InputError(f"{name}: |q| = {nf:.10g} is not 1 (tolerance "
+                             f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
+        return q / n
     if (n == 0.0).any():
         raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
     bad = np.abs(n - 1.0) > UNIT_TOLERANCE
