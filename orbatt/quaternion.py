@@ -50,7 +50,7 @@ def as_quaternion(q, name="q"):
     if a.ndim == 0 or a.shape[-1] != 4:
         raise InputError(f"{name}: expected an array of shape (..., 4) (scalar first "
                          f"q0, q1, q2, q3), got shape {a.shape}")
-    if not (all(map(math.isfinite, a.tolist())) if a.ndim == 1 else np.isfinite(a).all()):
+    if not (all(map(math.isfinite, a.ravel().tolist())) if a.size <= _TINY else np.isfinite(a).all()):
         raise InputError(f"{name}: contains non-finite values ({a!r}); give finite numbers")
     return a
 
@@ -139,7 +139,7 @@ def normalize(q):
     """``q / |q|``; raises :class:`InputError` for a zero or non-finite quaternion."""
     q = as_quaternion(q)
     n = norm(q)
-    if (n == 0.0).any():
+    if (0.0 in n.ravel().tolist()) if q.size <= _TINY else (n == 0.0).any():
         raise InputError("q: the zero quaternion has no direction; give a nonzero quaternion")
     return q / n[..., None]
 
@@ -402,14 +402,18 @@ def to_euler321(q):
     """
     q = normalize(q)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)
-    r22 = 1.0 - 2.0 * (x * x + y * y)  # cos(roll) cos(pitch)
-    r20 = 2.0 * (w * y - x * z)  # sin(pitch)
+    if q.ndim >= 2 and q.size <= _TINY:  # a few quaternions: the terms below in Python floats
+        r21, r22, r20, yn, yd = _euler321_terms(q)
+    else:
+        r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)
+        r22 = 1.0 - 2.0 * (x * x + y * y)  # cos(roll) cos(pitch)
+        r20 = 2.0 * (w * y - x * z)  # sin(pitch)
+        yn, yd = 2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)
     cp = np.hypot(r21, r22)
     pitch = np.arctan2(r20, cp)
     lock = cp < _SQRT_EPS
     roll = np.arctan2(r21, r22)
-    yaw_generic = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    yaw_generic = np.arctan2(yn, yd)
     if not lock.any():  # no gimbal lock: what the np.where below select (arrays, as there)
         return np.asarray(roll), pitch, np.asarray(yaw_generic)
     roll = np.where(lock, 0.0, roll)
@@ -417,6 +421,16 @@ def to_euler321(q):
     yaw_lock = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
     yaw = np.where(lock, yaw_lock, yaw_generic)
     return roll, pitch, yaw
+
+
+def _euler321_terms(q):
+    """The arguments of :func:`to_euler321`'s ``arctan2`` calls (``r21, r22, r20`` and yaw's
+    two) of the quaternions ``q (..., 4)``, computed in Python floats with the same operations
+    in the same order (the same values), as new float64 arrays of shape ``q.shape[:-1]``."""
+    terms = [(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y), 2.0 * (w * y - x * z),
+              2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)) for w, x, y, z in q.reshape(-1, 4).tolist()]
+    rows = np.array(list(zip(*terms)), dtype=np.float64)  # (5, n): each row contiguous
+    return tuple(row.reshape(q.shape[:-1]) for row in rows)
 
 
 #: the gimbal-lock threshold of :func:`to_euler321` on ``cos(pitch)``

@@ -129,7 +129,7 @@ def strip(value, unit, name, *, allow_plain=False):
             raise InputError(f"{name}: {value!r} is not a number or quantity") from None
         if not (allow_plain or unit is u.rad or unit is DIMENSIONLESS or unit in (DIMENSIONLESS, u.rad)):
             raise InputError(f"{name}: {value!r} has no unit; give a Quantity such as '{value} {unit.to_string()}'")
-    if not np.isfinite(out).all():
+    if not (all(map(math.isfinite, out.ravel().tolist())) if out.size <= 16 else np.isfinite(out).all()):
         raise InputError(f"{name}: {value!r} is not finite; give finite values")
     return out
 

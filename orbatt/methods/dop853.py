@@ -148,8 +148,11 @@ class DOP853(Method):
 
     def _grid_outputs(self, counters):
         p = self.p
-        n = int(counters[:, kd.CNT_IOUT].min())
-        Y = np.concatenate([np.broadcast_to(p.y0[:, None, :], (p.members, self.n0, p.y0.shape[1])), self.out[:, :n]], axis=1)
+        n = int(counters[0, kd.CNT_IOUT] if counters.shape[0] == 1 else counters[:, kd.CNT_IOUT].min())
+        # the initial state n0 times, then the outputs (np.concatenate of a broadcast, written directly)
+        Y = np.empty((p.members, self.n0 + n, p.y0.shape[1]))
+        Y[:, :self.n0] = p.y0[:, None, :]
+        Y[:, self.n0:] = self.out[:, :n]
         return p.t_out[:self.n0 + n], Y
 
     def outputs(self):
