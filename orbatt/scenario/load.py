@@ -150,6 +150,10 @@ def shipped_scenarios():
     return out
 
 
+#: the concrete Path class of this system (PosixPath or WindowsPath)
+_PATH = type(Path())
+
+
 def load_scenario(path) -> Scenario:
     """Read and validate a scenario file; return a :class:`Scenario`.
 
@@ -164,7 +168,7 @@ def load_scenario(path) -> Scenario:
         (an :class:`~orbatt.errors.InputError`) naming the file, the field, the value and
         the fix.
     """
-    p = Path(path)
+    p = path if type(path) is _PATH else Path(path)  # (a Path is immutable: kept)
     if not p.is_file():
         shipped = {name: f for name, _, f in shipped_scenarios()}
         key = p.name[:-5] if p.name.endswith(".toml") else p.name
@@ -239,7 +243,7 @@ def _copy_spec(spec: Spec) -> Spec:
     """A deep copy of ``spec`` (every field)."""
     if type(spec) is Spec and _SPEC_FIELDS == set(vars(spec)):  # a plain dataclass: its fields copied directly
         out = object.__new__(Spec)
-        out.__dict__.update({k: _fresh(v) for k, v in vars(spec).items()})
+        out.__dict__.update({k: v if v.__class__ in _ATOMS else _fresh(v) for k, v in vars(spec).items()})
         return out
     return dataclasses.replace(spec, **{f.name: _fresh(getattr(spec, f.name)) for f in dataclasses.fields(spec)})
 
