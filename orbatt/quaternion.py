@@ -402,7 +402,7 @@ def to_euler321(q):
     """
     q = normalize(q)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    if q.ndim >= 2 and q.size <= _TINY:  # a few quaternions: the terms below in Python floats
+    if q.ndim >= 2 and 0 < q.size <= _TINY:  # a few quaternions: the terms below in Python floats
         r21, r22, r20, yn, yd = _euler321_terms(q)
     else:
         r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)

@@ -58,3 +58,10 @@ def test_check_work_bound_agrees_with_the_exact_rate():
     check_work(ctx, limit * (1 - 1e-6), None, state)
     with pytest.raises(ScenarioError, match="the body turns"):
         check_work(ctx, limit * (1 + 1e-6), None, state)
+
+
+def test_empty_inputs_keep_their_shapes():
+    empty = np.zeros((0, 4))
+    assert qt.mul(empty, [1.0, 0.0, 0.0, 0.0]).shape == (0, 4)
+    assert qt.mul([1.0, 0.0, 0.0, 0.0], empty).shape == (0, 4)
+    assert [np.shape(x) for x in qt.to_euler321(empty)] == [(0,), (0,), (0,)]
