@@ -119,7 +119,7 @@ class RigidBody:
         value = U.strip(inertia, U.INERTIA, "inertia", allow_plain=True)
         if value.shape != (3,):
             raise InputError(f"inertia: expected three principal moments [I1, I2, I3], got shape {value.shape}")
-        if (value <= 0).any():
+        if min(value.tolist()) <= 0:  # (value <= 0).any() of three finite floats
             raise InputError(f"inertia: moments must be positive, got {value.tolist()}")
         check_triangle(value)
         self._value = value

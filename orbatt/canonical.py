@@ -52,7 +52,7 @@ def kinetic_energy(q, Q, inertia):
 
 
 def _kinetic_energy(g, inertia):
-    return 0.5 * np.sum(g * g / inertia, axis=-1)
+    return 0.5 * np.add.reduce(g * g / inertia, axis=-1)  # np.sum without its argument handling
 
 
 def body_quantities(q, Q, inertia):

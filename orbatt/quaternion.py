@@ -29,6 +29,8 @@ functions below. This module does not import numba.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import InputError
@@ -48,7 +50,7 @@ def as_quaternion(q, name="q"):
     if a.ndim == 0 or a.shape[-1] != 4:
         raise InputError(f"{name}: expected an array of shape (..., 4) (scalar first "
                          f"q0, q1, q2, q3), got shape {a.shape}")
-    if not np.isfinite(a).all():
+    if not (all(map(math.isfinite, a.ravel().tolist())) if a.size <= _TINY else np.isfinite(a).all()):
         raise InputError(f"{name}: contains non-finite values ({a!r}); give finite numbers")
     return a
 
@@ -66,6 +68,8 @@ def mul(a, b):
     b = np.asarray(b, dtype=np.float64)
     if a.ndim == 0 or b.ndim == 0 or a.shape[-1] != 4 or b.shape[-1] != 4:
         raise ValueError(f"mul: expected quaternions of shape (..., 4), got {a.shape} and {b.shape}")
+    if a.size <= _TINY and b.size <= _TINY and (a.shape == b.shape or a.ndim == 1 or b.ndim == 1):
+        return _mul_tiny(a, b)
     if a.size <= _FEW and b.size <= _FEW:
         # few quaternions (a run's outputs at a few times): the same terms as below in the same
         # order, as whole arrays (6 numpy calls instead of 32, each costing ~0.4 us on tiny
@@ -83,6 +87,23 @@ def mul(a, b):
     return out
 
 
+def _mul_tiny(a, b):
+    """:func:`mul` of a few quaternions (``a``, ``b`` of one shape, or one of them a single
+    quaternion) in Python floats: the per-component form's operations in its order (IEEE
+    double arithmetic, as numpy's), so the same values, without numpy's ~0.5 us per call."""
+    shape = a.shape if a.ndim >= b.ndim else b.shape
+    A = a.reshape(-1, 4).tolist()
+    B = b.reshape(-1, 4).tolist()
+    if len(A) != len(B):  # one of them a single quaternion
+        A, B = (A * len(B), B) if len(A) == 1 else (A, B * len(A))
+    out = [(a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+           for (a0, a1, a2, a3), (b0, b1, b2, b3) in zip(A, B)]
+    return np.array(out, dtype=np.float64).reshape(shape)
+
+
+#: most elements of the factors for :func:`mul`'s Python-float form
+_TINY = 8
 #: most elements of the factors for :func:`mul`'s whole-array form (beyond, its per-component
 #: form needs less memory traffic)
 _FEW = 64
@@ -102,7 +123,8 @@ def conj(q):
 
 def dot(a, b):
     """R^4 dot product ``a.b = Re(a b~)``; shape ``(...)``."""
-    return np.sum(np.asarray(a, dtype=np.float64) * np.asarray(b, dtype=np.float64), axis=-1)
+    # np.add.reduce: what np.sum calls, without its argument handling
+    return np.add.reduce(np.asarray(a, dtype=np.float64) * np.asarray(b, dtype=np.float64), axis=-1)
 
 
 def norm(q):
@@ -117,7 +139,7 @@ def normalize(q):
     """``q / |q|``; raises :class:`InputError` for a zero or non-finite quaternion."""
     q = as_quaternion(q)
     n = norm(q)
-    if (n == 0.0).any():
+    if (0.0 in n.ravel().tolist()) if q.size <= _TINY else (n == 0.0).any():
         raise InputError("q: the zero quaternion has no direction; give a nonzero quaternion")
     return q / n[..., None]
 
@@ -380,14 +402,18 @@ def to_euler321(q):
     """
     q = normalize(q)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)
-    r22 = 1.0 - 2.0 * (x * x + y * y)  # cos(roll) cos(pitch)
-    r20 = 2.0 * (w * y - x * z)  # sin(pitch)
+    if q.ndim >= 2 and 0 < q.size <= _TINY:  # a few quaternions: the terms below in Python floats
+        r21, r22, r20, yn, yd = _euler321_terms(q)
+    else:
+        r21 = 2.0 * (w * x + y * z)  # sin(roll) cos(pitch)
+        r22 = 1.0 - 2.0 * (x * x + y * y)  # cos(roll) cos(pitch)
+        r20 = 2.0 * (w * y - x * z)  # sin(pitch)
+        yn, yd = 2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)
     cp = np.hypot(r21, r22)
     pitch = np.arctan2(r20, cp)
     lock = cp < _SQRT_EPS
     roll = np.arctan2(r21, r22)
-    yaw_generic = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    yaw_generic = np.arctan2(yn, yd)
     if not lock.any():  # no gimbal lock: what the np.where below select (arrays, as there)
         return np.asarray(roll), pitch, np.asarray(yaw_generic)
     roll = np.where(lock, 0.0, roll)
@@ -395,6 +421,16 @@ def to_euler321(q):
     yaw_lock = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
     yaw = np.where(lock, yaw_lock, yaw_generic)
     return roll, pitch, yaw
+
+
+def _euler321_terms(q):
+    """The arguments of :func:`to_euler321`'s ``arctan2`` calls (``r21, r22, r20`` and yaw's
+    two) of the quaternions ``q (..., 4)``, computed in Python floats with the same operations
+    in the same order (the same values), as new float64 arrays of shape ``q.shape[:-1]``."""
+    terms = [(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y), 2.0 * (w * y - x * z),
+              2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)) for w, x, y, z in q.reshape(-1, 4).tolist()]
+    rows = np.array(list(zip(*terms)), dtype=np.float64)  # (5, n): each row contiguous
+    return tuple(row.reshape(q.shape[:-1]) for row in rows)
 
 
 #: the gimbal-lock threshold of :func:`to_euler321` on ``cos(pitch)``

@@ -25,6 +25,14 @@ TANGENT_TOLERANCE = 1e-6
 def unit_quaternion(q, name="q"):
     q = qt.as_quaternion(q, name)
     n = qt.norm(q)
+    if q.ndim == 1:  # one quaternion: the checks below on a float (numpy's calls cost ~1 us each)
+        nf = float(n)
+        if nf == 0.0:
+            raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
+        if abs(nf - 1.0) > UNIT_TOLERANCE:
+            raise InputError(f"{name}: |q| = {nf:.10g} is not 1 (tolerance "
+                             f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
+        return q / n
     if (n == 0.0).any():
         raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
     bad = np.abs(n - 1.0) > UNIT_TOLERANCE
@@ -63,8 +71,12 @@ class State:
                 raise InputError(f"Q: shape {Qv.shape} does not match q's {self.q.shape}") from None
         qQ = qt.dot(self.q, Qv)
         scale = qt.norm(Qv)
-        bad = np.abs(qQ) > TANGENT_TOLERANCE * scale
-        if bad.any():
+        if Qv.ndim == 1 and self.q.ndim == 1:  # one state: the comparison on floats
+            refused = abs(float(qQ)) > TANGENT_TOLERANCE * float(scale)
+        else:
+            refused = (np.abs(qQ) > TANGENT_TOLERANCE * scale).any()
+        if refused:
+            bad = np.abs(qQ) > TANGENT_TOLERANCE * scale
             raise InputError(f"Q: q.Q = {float(np.asarray(qQ)[bad].ravel()[0]):.6g} is not ~0 (|Q| = "
                              f"{float(np.asarray(scale)[bad].ravel()[0]):.6g}); Q must be tangent to the unit sphere "
                              "at q (Q = 2 q g): build it with State.from_omega or State.from_momentum")

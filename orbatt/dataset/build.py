@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import json
 import math
+import threading
 import time
+from collections import OrderedDict
 from datetime import datetime, timezone
 from typing import TYPE_CHECKING
 
@@ -88,8 +90,62 @@ _JSON = json.JSONEncoder(default=_json_default, sort_keys=True)
 
 def to_json(obj) -> str:
     """JSON text of ``obj`` (keys sorted; numpy scalars and arrays, Quantities and Times
-    written as numbers, lists and strings; ``None`` as ``{}``)."""
-    return _JSON.encode(obj if obj is not None else {})
+    written as numbers, lists and strings; ``None`` as ``{}``).
+
+    The text of a dict of plain values (str keys; str, int, float, bool, None or such dicts
+    as values: a run's orbit and potential descriptions, its settings) is remembered by those
+    values, their types and the signs of the floats (what decides the text), so that a study
+    running the same scenario again skips encoding the floats (~5 us a description).
+    """
+    if type(obj) is not dict:
+        return _JSON.encode(obj if obj is not None else {})
+    key = _json_key(obj, 0)
+    if key is None:
+        return _JSON.encode(obj)
+    with _JSON_TEXTS_LOCK:
+        text = _JSON_TEXTS.get(key)
+        if text is not None:
+            _JSON_TEXTS.move_to_end(key)
+            return text
+    text = _JSON.encode(obj)
+    with _JSON_TEXTS_LOCK:
+        _JSON_TEXTS[key] = text
+        while len(_JSON_TEXTS) > JSON_CACHE_SIZE:
+            _JSON_TEXTS.popitem(last=False)
+    return text
+
+
+#: JSON texts of plain dicts by :func:`_json_key`, most recently used last (:func:`to_json`)
+_JSON_TEXTS: OrderedDict = OrderedDict()
+_JSON_TEXTS_LOCK = threading.Lock()
+#: most texts kept
+JSON_CACHE_SIZE = 256
+#: the value types whose equal values have one JSON text (float: nonzero ones)
+_PLAIN = frozenset((str, int, bool, type(None)))
+
+
+def _json_key(obj, depth):
+    """A hashable key that decides :func:`to_json`'s text of the dict ``obj``: its items with
+    each value's type (``1``, ``1.0`` and ``True`` are equal keys otherwise) and each float's
+    sign (``0.0 == -0.0``); None for anything else (other types, non-str keys, deep nesting)."""
+    items = []
+    for k, v in obj.items():
+        if k.__class__ is not str:
+            return None
+        t = v.__class__
+        if t in _PLAIN or (t is float and v != 0.0):  # equal nonzero floats have one text
+            items.append((k, t, v))
+        elif t is float:
+            items.append((k, t, v, math.copysign(1.0, v)))
+            items.append((k, t, v))
+        elif t is dict and depth < 2:
+            sub = _json_key(v, depth + 1)
+            if sub is None:
+                return None
+            items.append((k, t, sub))
+        else:
+            return None
+    return tuple(items)
 
 
 def utc_now() -> str:
@@ -126,8 +182,16 @@ def _cf_attrs(units, long_name, extra):
 
 
 def _var(dims, data, units, long_name, **extra):
-    """:func:`cf_variable`'s variable as a plain :class:`~orbatt.dataset.content.Var`."""
-    return Var(dims, data, _cf_attrs(units, long_name, extra))
+    """:func:`cf_variable`'s variable as a plain :class:`~orbatt.dataset.content.Var`
+    (:func:`_cf_attrs` and ``Var(...)`` written out: a run makes ~30)."""
+    attrs = {"units": units, "long_name": long_name}
+    if extra:
+        attrs.update(extra)
+    return _new_tuple(Var, (dims, data, attrs))
+
+
+#: what ``Var(dims, values, attrs)`` calls, without the frame of its generated ``__new__``
+_new_tuple = tuple.__new__
 
 
 def _quat_attrs(frames, maps):
@@ -218,7 +282,8 @@ def global_attrs(*, method, settings, stats, potential, dimensionless, complete=
         "orbatt_version": version,
         "method": str(method),
         "method_settings": to_json(settings),
-        "integration_stats": stats if isinstance(stats, str) else to_json(stats),
+        # (a run's statistics hold its wall time: encoded directly, never remembered)
+        "integration_stats": stats if isinstance(stats, str) else _JSON.encode(stats if stats is not None else {}),
         "integration_complete": np.int8(1 if complete else 0),
         "potential": to_json(pot_desc),
         "unit_system": "dimensionless (angles in rad)" if dimensionless else "kg km s rad",

@@ -89,7 +89,8 @@ def count_totals(counters: np.ndarray, columns: dict, sizes=None) -> dict:
     """
     if sizes is not None:
         counters = counters * sizes[:, None]
-    totals = counters.sum(axis=0).tolist()  # one reduction for every column
+    # one reduction for every column (one row: its values)
+    totals = counters[0].tolist() if counters.shape[0] == 1 else counters.sum(axis=0).tolist()
     return {name: int(totals[col]) for name, col in columns.items()}
 
 

@@ -128,12 +128,12 @@ def initial_states(state0, bodies):
     if state0.body.dimensionless != b0.dimensionless:
         raise InputError("state0: built for a body with different units (dimensional vs dimensionless) than body")
     y = np.asarray(state0.y, dtype=np.float64)
-    if not np.isfinite(y).all():
+    if not (all(map(math.isfinite, y.ravel().tolist())) if y.size <= 64 else np.isfinite(y).all()):
         raise InputError(f"state0: contains non-finite values (q = {state0.q!r}, Q = {state0.Q!r})")
     if y.ndim > 2:
         raise InputError(f"state0: an ensemble state must have q of shape (E, 4), got {state0.q.shape}")
     state_ensemble = y.ndim == 2
-    y = np.atleast_2d(y)
+    y = y[None] if y.ndim == 1 else y  # np.atleast_2d
     E = max(len(bodies), y.shape[0])
     if len(bodies) not in (1, E) or y.shape[0] not in (1, E):
         raise InputError(f"body/state0: {len(bodies)} bodies and {y.shape[0]} initial states do not broadcast to "
