@@ -167,7 +167,9 @@ def environment_ensemble(n_members, repeats, median_time, angle, rtols):
     for label, pot in (("gravity gradient alone", orbatt.GravityGradient(orbit)),
                        ("+ drag, SRP, magnetic (6 facets)", env)):
         ref = orbatt.propagate(body, sample, pot, [0.0, T], rtol=3e-15, atol=1e-18).q[:, -1]
-        for rtol in rtols:
+        # the tabulated environment (cubic splines in time, knots where the third derivative
+        # jumps) converges erratically: the grid goes on to the smallest rtol float64 allows
+        for rtol in [*rtols, 3e-15]:
             q = orbatt.propagate(body, sample, pot, [0.0, T], rtol=rtol, atol=rtol).q[:, -1]
             err = max(angle(q[e], ref[e]) for e in range(24))
             if err <= ENV_TARGET:
@@ -175,7 +177,8 @@ def environment_ensemble(n_members, repeats, median_time, angle, rtols):
         tm, tr = median_time(lambda: orbatt.propagate(body, states, pot, [0.0, T], rtol=rtol, atol=rtol), repeats,
                              budget_s=3.0)
         wall = tr.stats["wall_time_s"]
-        out.append((label, f"rtol = atol {rtol:.1e}", err, wall, n_members / wall))
+        setting = f"rtol = atol {rtol:.1e}" + ("" if err <= ENV_TARGET else " (target not reached)")
+        out.append((label, setting, err, wall, n_members / wall))
     return out
 
 
@@ -191,9 +194,9 @@ def print_first_runs(rows, fmt_t):
 def print_environment_ensemble(rows, n_members, fmt_t):
     print(f"\n## Ensemble with environment torques (cubesat in LEO, one orbit, N = {n_members}, dop853, "
           f"<= {ENV_TARGET:.0e} rad on 24 sampled members)\n")
-    print(f"{'model':<34} {'setting':<22} {'max error':>9} {'time':>9} {'body-orbits/s':>14} {'vs GG alone':>12}")
+    print(f"{'model':<34} {'setting':<42} {'max error':>9} {'time':>9} {'body-orbits/s':>14} {'vs GG alone':>12}")
     base = rows[0][4]
     for label, setting, err, wall, rate in rows:
-        print(f"{label:<34} {setting:<22} {err:9.1e} {fmt_t(wall):>9} {rate:14.0f} {rate / base:11.2f}x")
+        print(f"{label:<34} {setting:<42} {err:9.1e} {fmt_t(wall):>9} {rate:14.0f} {rate / base:11.2f}x")
     print("  (peer: the same members with the gravity gradient alone, same run; heyoka has no tabulated "
           "environment to compare with)")

@@ -763,7 +763,7 @@ def main(argv=None):
         ensembles(kep, sizes, args.repeats)
         if hy is not None:
             heyoka_ensemble(kep, sizes, args.repeats)
-        n_env = 200 if args.quick else 1000  # the environment needs rtol ~1e-13 for 1e-6 rad (end_to_end.py)
+        n_env = 200 if args.quick else 1000  # the environment needs rtol 1e-14 .. 3e-15 for 1e-6 rad (end_to_end.py)
         end_to_end.print_environment_ensemble(
             end_to_end.environment_ensemble(n_env, args.repeats, median_time, angle, RTOLS), n_env, fmt_t)
     print(f"\ntotal benchmark time {time.time() - t_start:.0f} s")
