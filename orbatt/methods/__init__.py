@@ -28,7 +28,7 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
     6; ``"splitting6-yoshida"``). Keep ``|q| = 1`` and ``q.Q = 0`` to round-off and, for
     autonomous potentials, a bounded energy error over any number of steps. They are the
     tool for long runs and ensembles, not for short high-accuracy runs: for the paper's
-    Keplerian case (10 orbits, 1e-9 rad) they need 3x (order 6) to 10x (order 4) the time of
+    Keplerian case (10 orbits, 1e-9 rad) they need 6x (order 6) to 18x (order 4) the time of
     ``"dop853"`` (``benchmarks/README.md``).
 ``"rk4"`` (:mod:`.fixed_step`)
     Classical fixed-step Runge-Kutta 4, compiled; a baseline.
