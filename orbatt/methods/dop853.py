@@ -45,7 +45,7 @@ class DOP853(Method):
             raise InputError(f"max_step: {ms!r} is not a number") from None
         if not ms > 0:
             raise InputError(f"max_step: {ms!r} must be positive")
-        self.max_step = ms
+        self.max_step = self.max_step_time = ms
         iv = self.opts.pop("independent_variable", "auto")
         if iv not in INDEPENDENT_VARIABLES:
             raise InputError(f"independent_variable: {iv!r} is not one of "
@@ -63,6 +63,7 @@ class DOP853(Method):
         output times ``self.t_k`` are known; for the eccentric anomaly, map them and
         ``max_step`` to it (:class:`EccentricAnomaly`). Returns the model the loops take."""
         self.anomaly = None
+        self.max_step = self.max_step_time
         kernel = problem.kernel
         row = kernel.terms[0]
         keplerian = int(row[km.KIND]) == km.ORBIT_KEPLER and row[km.P1] - row[km.P0] >= kk.ORB_SIZE
@@ -79,7 +80,7 @@ class DOP853(Method):
                              "the eccentric anomaly; give independent_variable = 'time'")
         self.anomaly = an
         self.t_k = an.s_out
-        self.max_step = an.max_step(self.max_step)
+        self.max_step = an.max_step(self.max_step_time)
         return an.kernel
 
     def _start_states(self, st):
