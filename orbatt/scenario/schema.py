@@ -217,8 +217,8 @@ tle_file       path                           one of tle, tle_file  tle: a file 
                                                                     optional), relative to the scenario file
 
 [integration]
-method       text                'dop853'                        the integration method (`orbatt methods` lists
-                                                                 them)
+method       text                'dop853'                        the integration method (listed by
+                                                                 `orbatt.methods.methods()`)
 rtol         plain               the method's                    relative tolerance (adaptive methods)
 atol         plain               the method's                    absolute tolerance (adaptive methods)
 step         time or 'N orbits'  required by fixed-step methods  the fixed step
