@@ -25,6 +25,10 @@ last failure was non-finite, else :data:`STEP_TOO_SMALL`). The controller, the l
 output times and Hairer's initial step are inline helpers shared by the single and the lane
 loops.
 
+Breakpoints: steps also land on the knots of the model's environment tables
+(:func:`orbatt.core.model.next_breakpoint`), where the right-hand side's third derivative
+jumps; nothing is recorded there.
+
 Output: the integrator lands exactly on every requested output time (the step before it is
 shortened, the step size proposed before shortening is kept for the step after), so outputs
 carry the full accuracy of step-end values - no interpolation (``DESIGN.md`` §4).
@@ -51,6 +55,7 @@ from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VA
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES, ORDER
 from .gyrostat import rhs_extended
 from .hamiltonian import rhs, rhs_inline
+from .model import next_breakpoint
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
@@ -240,11 +245,15 @@ def failure(flags):
 
 
 @jit_inline
-def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out, hmin, flags):
+def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out, hmin, flags, t_brk):
     """``(status, hh, landing, t_next)`` before a step attempt towards the next output time
-    ``t_next = t_out[i_out]``: :data:`DONE` to attempt the step ``hh`` (:func:`plan_step`),
-    else why to stop (budget of this call, ``max_steps``, step-size underflow)."""
+    ``t_out[i_out]`` or the next breakpoint ``t_brk`` if earlier
+    (:func:`orbatt.core.model.next_breakpoint`), ``t_next``: :data:`DONE` to attempt the
+    step ``hh`` (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``,
+    step-size underflow)."""
     t_next = t_out[i_out]
+    if t_brk < t_next:
+        t_next = t_brk
     if attempts >= budget:
         return PAUSED, 0.0, False, t_next
     if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
@@ -370,12 +379,13 @@ def _advance_of(width, extended):
         hmin = max(st[ST_HMIN], 10.0 * EPS * max(abs(t), abs(t_out[nout - 1])))
         aQ = atol * momentum_scale(inertia)
         cap = rec_t.shape[0]
+        t_brk = next_breakpoint(t, terms, params, table)
         while i_out < nout:
             if record_all and cnt[CNT_NREC] >= cap:
                 status = BUFFER_FULL
                 break
             status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out,
-                                                        hmin, flags)
+                                                        hmin, flags, t_brk)
             if status != DONE:
                 break
             # --- the 12 stages
@@ -434,11 +444,13 @@ def _advance_of(width, extended):
                     y[i] = ynew[i]
                     K[0, i] = K[N_STAGES, i]
                 t = t_new
-                if landing:
+                if landing and t == t_out[i_out]:  # (else a breakpoint)
                     if not record_all:
                         for i in range(ncomp):
                             out_y[i_out, i] = y[i]
                     i_out += 1
+                if t >= t_brk:
+                    t_brk = next_breakpoint(t, terms, params, table)
                 if record_all:
                     nrec = cnt[CNT_NREC]
                     rec_t[nrec] = t

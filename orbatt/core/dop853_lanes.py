@@ -23,6 +23,7 @@ from .dop853 import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, ST_FACOLD, ST_H, ST_HMIN, ST
                      reject_step)
 from .dop853_coefficients import A_COL, A_PTR, A_VAL, B, C, E3, E5, N_STAGES
 from .hamiltonian import rhs_lanes
+from .model import next_breakpoint
 
 
 @jit
@@ -102,9 +103,10 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
     attempts = 0
     hmin = max(st[ST_HMIN], 10.0 * EPS * max(abs(t), abs(t_out[nout - 1])))
     bad_lane = -1
+    t_brk = next_breakpoint(t, terms, params, table)
     while i_out < nout:
         status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out, hmin,
-                                                    flags)
+                                                    flags, t_brk)
         if status != DONE:
             break
         for s in range(1, N_STAGES):
@@ -173,11 +175,13 @@ def advance_group(Y, st, cnt, F0, t_out, out_y, inertia, terms, params, table, w
                     yg[i, l] = ynew[i, l]
                     K[0, i, l] = K[N_STAGES, i, l]
             t = t_new
-            if landing:
+            if landing and t == t_out[i_out]:  # (else a breakpoint)
                 for l in range(nl):
                     for i in range(NDIM):
                         out_y[l, i_out, i] = yg[i, l]
                 i_out += 1
+            if t >= t_brk:
+                t_brk = next_breakpoint(t, terms, params, table)
             h = hnew
         else:
             flags, h, reject = reject_step(cnt, flags, hh, fac11)

@@ -84,7 +84,7 @@ from ._jit import jit, jit_inline
 from . import environment as env
 from . import potentials as pot
 from . import torques as trq
-from .kepler import ORB_SIZE, kepler_anomaly, kepler_radial, kepler_state
+from .kepler import ORB_SIZE, kepler_anomaly, kepler_radial, kepler_state, solve_kepler
 from .sampled import TABLE_COLUMNS, sampled_radial, sampled_state
 
 # orbit kinds (row 0)
@@ -143,6 +143,59 @@ def orbit_at(s, terms, params, table, work):
         return kepler_anomaly(s, params[terms[0, P0]:terms[0, P1]], (terms[0, FLAGS] & NEEDS_VELOCITY) != 0, work)
     r, xhat, v = orbit_radial(s, terms, params, table, work)
     return s, 1.0, r, xhat, v
+
+
+@jit
+def next_breakpoint(s, terms, params, table):
+    """The first knot after ``s`` of the model's environment tables (the spline tables of the
+    drag, SRP, magnetic and control terms, :mod:`orbatt.core.environment`), in the step loops'
+    independent variable (:func:`orbit_at`); ``inf`` if none. The tables are cubic splines in
+    time whose third derivative jumps at the knots: the step loops land on them (as on output
+    times), so that no step straddles one and DOP853 keeps its order (a step across a knot
+    has an O(h^4) error). Measured over one orbit of slowly turning cubesats under a residual
+    dipole (20 s knots), at rtol 1e-8: 1e-11 rad instead of up to 1.6e-5 rad (and 6e-8 rad at
+    rtol 1e-12), with a step per knot at least. The facets' shading (drag, SRP) is a kink in
+    the attitude, not in time, and stays. The orbit's own samples (a sampled orbit) are not
+    breakpoints."""
+    best = np.inf
+    kind0 = terms[0, KIND]
+    t = s
+    if kind0 == ORBIT_KEPLER_ANOMALY:
+        orb = params[terms[0, P0]:terms[0, P1]]
+        t = (s - orb[1] * math.sin(s) - orb[5]) / orb[6]
+    for j in range(1, terms.shape[0]):
+        kind = terms[j, KIND]
+        r0 = terms[j, R0]
+        r1 = terms[j, R1]
+        if r1 - r0 < 2 or not (kind == DRAG or kind == SRP or kind == MAGNETIC or kind == BDOT_CONTROL
+                                or kind == PD_CONTROL):
+            continue
+        # the first knot > t (binary search over the knot column)
+        lo = r0
+        hi = r1 - 1
+        if table[hi, 0] <= t:
+            continue
+        if table[lo, 0] > t:
+            hi = lo
+        else:
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if table[mid, 0] <= t:
+                    lo = mid
+                else:
+                    hi = mid
+        k = hi
+        while k < r1:
+            tk = table[k, 0]
+            sk = tk
+            if kind0 == ORBIT_KEPLER_ANOMALY:
+                sk = solve_kepler(orb[5] + orb[6] * tk, orb[1])
+            if sk > s:
+                if sk < best:
+                    best = sk
+                break
+            k += 1
+    return best
 
 
 @jit_inline
