@@ -122,6 +122,22 @@ def shadow_cylindrical(r_sat, r_sun, R_body, R_sun):
 
 # ---- sampled tables ------------------------------------------------------------------------
 @jit_inline
+def bisect_row(table, t):
+    """The index ``i`` with ``table[i, 0] <= t < table[i + 1, 0]`` by bisection over the first
+    column (increasing times), for ``table[0, 0] <= t < table[-1, 0]``; ``t == table[-1, 0]``
+    gives the last interval."""
+    lo = 0
+    hi = table.shape[0] - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if table[mid, 0] <= t:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@jit_inline
 def find_row(table, t, work, slot):
     """Index ``i`` with ``table[i, 0] <= t <= table[i + 1, 0]`` (the first column holds
     increasing times), warm-started from ``work[slot]`` and stored there. Raises
@@ -143,14 +159,7 @@ def find_row(table, t, work, slot):
             elif i >= 1 and table[i - 1, 0] <= t:
                 work[slot] = i - 1
                 return i - 1
-    lo = 0
-    hi = n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if table[mid, 0] <= t:
-            lo = mid
-        else:
-            hi = mid
+    lo = bisect_row(table, t)
     work[slot] = lo
     return lo
 

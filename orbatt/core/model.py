@@ -170,21 +170,10 @@ def next_breakpoint(s, terms, params, table):
         if r1 - r0 < 2 or not (kind == DRAG or kind == SRP or kind == MAGNETIC or kind == BDOT_CONTROL
                                 or kind == PD_CONTROL):
             continue
-        # the first knot > t (binary search over the knot column)
-        lo = r0
-        hi = r1 - 1
-        if table[hi, 0] <= t:
+        # the first knot > t
+        if table[r1 - 1, 0] <= t:
             continue
-        if table[lo, 0] > t:
-            hi = lo
-        else:
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if table[mid, 0] <= t:
-                    lo = mid
-                else:
-                    hi = mid
-        k = hi
+        k = r0 if table[r0, 0] > t else r0 + env.bisect_row(table[r0:r1], t) + 1
         while k < r1:
             tk = table[k, 0]
             sk = tk
