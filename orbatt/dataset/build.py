@@ -49,9 +49,13 @@ __all__ = [
 
 #: Order of the ``quat`` dimension, written on every quaternion variable.
 QUATERNION_ORDER = "w x y z"
+#: the index coordinates' values, shared by every result: read-only, so that editing a
+#: result's coordinate in place cannot change the next run's
 QUAT_INDEX = np.array([0, 1, 2, 3])
+QUAT_INDEX.flags.writeable = False
 QUAT_LABELS = ["w", "x", "y", "z"]
 AXIS_INDEX = np.array([1, 2, 3])
+AXIS_INDEX.flags.writeable = False
 AXIS_LABELS = ["x", "y", "z"]
 EULER_313_LABELS = ["phi", "theta", "psi"]
 EULER_321_LABELS = ["roll", "pitch", "yaw"]

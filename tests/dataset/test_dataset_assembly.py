@@ -93,3 +93,21 @@ def test_cached_time_indexes_are_shared_read_only_and_per_values():
     assert list(c["time"].values) == [7.0, 1.5] and list(a["time"].values) == [0.0, 1.5]
     a["time"].attrs["units"] = "h"
     assert b["time"].attrs["units"] == "s"
+
+
+def test_shared_index_coordinates_cannot_be_edited_into_the_next_run():
+    """``run_content`` hands out the index coordinates' shared values (no copy per run): they
+    are read-only, so an edit in place raises instead of changing every later result."""
+    import warnings
+
+    import orbatt
+
+    sc = orbatt.load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "paper-torque-free.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        content = sc.run_content()
+    for name in ("quat", "axis"):
+        values = content.coords[name].values
+        with pytest.raises(ValueError, match="read-only"):
+            values[0] = 7
+    np.testing.assert_array_equal(sc.run()["quat"].values, [0, 1, 2, 3])
