@@ -70,12 +70,6 @@ def mul(a, b):
         raise ValueError(f"mul: expected quaternions of shape (..., 4), got {a.shape} and {b.shape}")
     if a.size <= _TINY and b.size <= _TINY and (a.shape == b.shape or a.ndim == 1 or b.ndim == 1):
         return _mul_tiny(a, b)
-    if a.size <= _FEW and b.size <= _FEW:
-        # few quaternions (a run's outputs at a few times): the same terms as below in the same
-        # order, as whole arrays (6 numpy calls instead of 32, each costing ~0.4 us on tiny
-        # arrays); x - y is x + (-y) and (-a) b is -(a b) exactly, so the values are the same
-        terms = a[..., :, None] * (b[..., _MUL_INDEX] * _MUL_SIGN)
-        return ((terms[..., 0, :] + terms[..., 1, :]) + terms[..., 2, :]) + terms[..., 3, :]
     a0, a1, a2, a3 = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     b0, b1, b2, b3 = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
     # written into one array (no stack of temporaries): the same operations in the same order
@@ -104,13 +98,6 @@ def _mul_tiny(a, b):
 
 #: most elements of the factors for :func:`mul`'s Python-float form
 _TINY = 8
-#: most elements of the factors for :func:`mul`'s whole-array form (beyond, its per-component
-#: form needs less memory traffic)
-_FEW = 64
-#: :func:`mul`'s product as terms ``j = 0..3`` of each component ``k``: ``a_j b_INDEX[j, k]``
-#: with the sign ``SIGN[j, k]``, summed in the order of ``j``
-_MUL_INDEX = np.array([[0, 1, 2, 3], [1, 0, 3, 2], [2, 3, 0, 1], [3, 2, 1, 0]])
-_MUL_SIGN = np.array([[1.0, 1.0, 1.0, 1.0], [-1.0, 1.0, -1.0, 1.0], [-1.0, 1.0, 1.0, -1.0], [-1.0, -1.0, 1.0, 1.0]])
 
 #: componentwise factor of the conjugate
 _CONJ = np.array([1.0, -1.0, -1.0, -1.0])

@@ -25,19 +25,17 @@ TANGENT_TOLERANCE = 1e-6
 def unit_quaternion(q, name="q"):
     q = qt.as_quaternion(q, name)
     n = qt.norm(q)
-    if q.ndim == 1:  # one quaternion: the checks below on a float (numpy's calls cost ~1 us each)
+    if q.ndim == 1:  # one quaternion: the checks on a float (numpy's calls cost ~1 us each)
         nf = float(n)
-        if nf == 0.0:
-            raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
-        if abs(nf - 1.0) > UNIT_TOLERANCE:
-            raise InputError(f"{name}: |q| = {nf:.10g} is not 1 (tolerance "
-                             f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
-        return q / n
-    if (n == 0.0).any():
+        zero, off = nf == 0.0, abs(nf - 1.0) > UNIT_TOLERANCE
+    else:
+        bad = np.abs(n - 1.0) > UNIT_TOLERANCE
+        zero, off = (n == 0.0).any(), bad.any()
+    if zero:
         raise InputError(f"{name}: the zero quaternion is not an attitude; give a unit quaternion")
-    bad = np.abs(n - 1.0) > UNIT_TOLERANCE
-    if bad.any():
-        raise InputError(f"{name}: |q| = {float(np.asarray(n)[bad].ravel()[0]):.10g} is not 1 (tolerance "
+    if off:
+        first = nf if q.ndim == 1 else float(np.asarray(n)[bad].ravel()[0])
+        raise InputError(f"{name}: |q| = {first:.10g} is not 1 (tolerance "
                          f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
     return q / n[..., None]
 

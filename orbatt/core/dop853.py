@@ -61,7 +61,7 @@ from .model import next_breakpoint
 #: flag names of :mod:`orbatt.core._jit`
 __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
            "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
-           "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE", "CNT_STEPS",
+           "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE", "EPS", "CNT_STEPS",
            "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
 
 # Step-size controller (Hairer's defaults for dop853): safety, bounds on h_new / h

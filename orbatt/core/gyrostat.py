@@ -130,9 +130,8 @@ def rhs_extended(s, y, inertia, terms, params, table, work, dy):
     for k in range(4):
         dy[k] = dtds * (0.25 * qd[k])
         dy[4 + k] = dtds * (0.25 * Qd[k] - G[k] - Gc[k])
-    if dtds != 1.0:
-        for k in range(8, y.shape[0]):
-            dy[k] *= dtds
+    for k in range(8, y.shape[0]):  # the wheels' rates (control_torques wrote dh/dt)
+        dy[k] *= dtds
 
 
 @jit

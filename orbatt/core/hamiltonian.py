@@ -48,7 +48,7 @@ def _rhs(s, y, inertia, terms, params, table, work, dy):
     Q = (y[4], y[5], y[6], y[7])
     _, a = kinetic_rates(q, Q, inertia)
     qd, Qd = eq7(q, Q, a)
-    dtds, G = gradient_at(s, q, inertia, terms, params, table, work)
+    dtds, _, G = gradient_at(s, q, inertia, terms, params, table, work)
     for k in range(4):
         dy[k] = dtds * (0.25 * qd[k])
         dy[4 + k] = dtds * (0.25 * Qd[k] - G[k])

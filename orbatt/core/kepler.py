@@ -258,6 +258,20 @@ def kepler_state(t, orb, work):
 
 
 @jit_inline
+def time_of_anomaly(E, sin_E, orb):
+    """The time ``t = (E - e sin E - M0) / n`` of the eccentric anomaly ``E`` (with its
+    ``sin E`` given)."""
+    return (E - orb[1] * sin_E - orb[5]) / orb[6]
+
+
+@jit_inline
+def anomaly_of_time(t, orb):
+    """The eccentric anomaly (rad, unreduced) of the time ``t``: :func:`solve_kepler` of its
+    mean anomaly (a cold solve)."""
+    return solve_kepler(orb[5] + orb[6] * t, orb[1])
+
+
+@jit_inline
 def kepler_anomaly(E, orb, velocity, work):
     """The orbit at the eccentric anomaly ``E`` (rad, unreduced), in closed form: no Kepler
     solve (the integrators' eccentric-anomaly form, ``orbatt.core.model``'s
@@ -311,7 +325,7 @@ def kepler_anomaly(E, orb, velocity, work):
         vs = -vfac * s / r
         vc = vfac * sq * c / r
         v = (vs * orb[7] + vc * orb[10], vs * orb[8] + vc * orb[11], vs * orb[9] + vc * orb[12])
-    return (E - e * s - orb[5]) / n, rr / n, r, xhat, v
+    return time_of_anomaly(E, s, orb), rr / n, r, xhat, v
 
 
 @jit
@@ -322,7 +336,7 @@ def anomalies_at(t, orb):
     out = np.empty(t.shape[0])
     increasing = True
     for i in range(t.shape[0]):
-        out[i] = solve_kepler(orb[5] + orb[6] * t[i], orb[1])
+        out[i] = anomaly_of_time(t[i], orb)
         if i > 0 and not out[i] > out[i - 1]:
             increasing = False
     return out, increasing
@@ -334,7 +348,7 @@ def times_at(E, orb):
     ``t``)."""
     out = np.empty(E.shape[0])
     for i in range(E.shape[0]):
-        out[i] = (E[i] - orb[1] * math.sin(E[i]) - orb[5]) / orb[6]
+        out[i] = time_of_anomaly(E[i], math.sin(E[i]), orb)
     return out
 
 

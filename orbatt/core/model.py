@@ -84,7 +84,7 @@ from ._jit import jit, jit_inline
 from . import environment as env
 from . import potentials as pot
 from . import torques as trq
-from .kepler import ORB_SIZE, kepler_anomaly, kepler_radial, kepler_state, solve_kepler
+from .kepler import ORB_SIZE, anomaly_of_time, kepler_anomaly, kepler_radial, kepler_state, time_of_anomaly
 from .sampled import TABLE_COLUMNS, sampled_radial, sampled_state
 
 # orbit kinds (row 0)
@@ -147,9 +147,9 @@ def orbit_at(s, terms, params, table, work):
 
 @jit
 def next_breakpoint(s, terms, params, table):
-    """The first knot after ``s`` of the model's environment tables (the spline tables of the
-    drag, SRP, magnetic and control terms, :mod:`orbatt.core.environment`), in the step loops'
-    independent variable (:func:`orbit_at`); ``inf`` if none. The tables are cubic splines in
+    """The first knot after ``s`` of the model's environment tables (every term row's table: the
+    spline tables of the drag, SRP, magnetic and control terms, :mod:`orbatt.core.environment`),
+    in the step loops' independent variable (:func:`orbit_at`); ``inf`` if none. The tables are cubic splines in
     time whose third derivative jumps at the knots: the step loops land on them (as on output
     times), so that no step straddles one and DOP853 keeps its order (a step across a knot
     has an O(h^4) error). Measured over one orbit of slowly turning cubesats under a residual
@@ -162,13 +162,11 @@ def next_breakpoint(s, terms, params, table):
     t = s
     if kind0 == ORBIT_KEPLER_ANOMALY:
         orb = params[terms[0, P0]:terms[0, P1]]
-        t = (s - orb[1] * math.sin(s) - orb[5]) / orb[6]
+        t = time_of_anomaly(s, math.sin(s), orb)
     for j in range(1, terms.shape[0]):
-        kind = terms[j, KIND]
         r0 = terms[j, R0]
         r1 = terms[j, R1]
-        if r1 - r0 < 2 or not (kind == DRAG or kind == SRP or kind == MAGNETIC or kind == BDOT_CONTROL
-                                or kind == PD_CONTROL):
+        if r1 - r0 < 2:
             continue
         # the first knot > t
         if table[r1 - 1, 0] <= t:
@@ -178,7 +176,7 @@ def next_breakpoint(s, terms, params, table):
             tk = table[k, 0]
             sk = tk
             if kind0 == ORBIT_KEPLER_ANOMALY:
-                sk = solve_kepler(orb[5] + orb[6] * tk, orb[1])
+                sk = anomaly_of_time(tk, orb)
             if sk > s:
                 if sk < best:
                     best = sk
@@ -325,21 +323,21 @@ def terms_at(t, q, inertia, terms, params, table, work, r, xhat, v):
 def gradient(t, q, inertia, terms, params, table, work):
     """``(U, G)``: the total potential and generalized gradient of all terms at time ``t`` and
     attitude ``q`` (4-tuple); ``(0, 0)`` for an empty model."""
-    if terms.shape[0] > 1:
-        r, xhat, v = orbit_radial(t, terms, params, table, work)
-        return terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
-    return 0.0, (0.0, 0.0, 0.0, 0.0)
+    _, U, G = gradient_at(t, q, inertia, terms, params, table, work)
+    return U, G
 
 
 @jit_inline
 def gradient_at(s, q, inertia, terms, params, table, work):
-    """``(dt/ds, G)``: :func:`gradient`'s ``G`` at the step loops' independent variable ``s``
-    (:func:`orbit_at`) and the rate ``dt/ds`` (1 when ``s`` is the time)."""
+    """``(dt/ds, U, G)``: the total potential and generalized gradient of all terms at the step
+    loops' independent variable ``s`` (:func:`orbit_at`; the time for the evaluation kernels'
+    models) and the rate ``dt/ds`` (1 when ``s`` is the time); ``(1, 0, 0)`` for an empty
+    model."""
     if terms.shape[0] > 1:
         t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
-        _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
-        return dtds, G
-    return 1.0, (0.0, 0.0, 0.0, 0.0)
+        U, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
+        return dtds, U, G
+    return 1.0, 0.0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit_inline

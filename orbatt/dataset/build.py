@@ -141,7 +141,6 @@ def _json_key(obj, depth):
             items.append((k, t, v))
         elif t is float:
             items.append((k, t, v, math.copysign(1.0, v)))
-            items.append((k, t, v))
         elif t is dict and depth < 2:
             sub = _json_key(v, depth + 1)
             if sub is None:
@@ -186,16 +185,8 @@ def _cf_attrs(units, long_name, extra):
 
 
 def _var(dims, data, units, long_name, **extra):
-    """:func:`cf_variable`'s variable as a plain :class:`~orbatt.dataset.content.Var`
-    (:func:`_cf_attrs` and ``Var(...)`` written out: a run makes ~30)."""
-    attrs = {"units": units, "long_name": long_name}
-    if extra:
-        attrs.update(extra)
-    return _new_tuple(Var, (dims, data, attrs))
-
-
-#: what ``Var(dims, values, attrs)`` calls, without the frame of its generated ``__new__``
-_new_tuple = tuple.__new__
+    """:func:`cf_variable`'s variable as a plain :class:`~orbatt.dataset.content.Var`."""
+    return Var(dims, data, _cf_attrs(units, long_name, extra))
 
 
 def _quat_attrs(frames, maps):

@@ -241,8 +241,6 @@ class DOP853Lanes(DOP853):
         return s
 
 
-#: float64's machine epsilon (np.finfo costs ~2 us a call)
-_EPS = float(np.finfo(float).eps)
 #: the values of the option ``independent_variable``
 INDEPENDENT_VARIABLES = ("auto", "eccentric-anomaly", "time")
 
@@ -300,7 +298,7 @@ class EccentricAnomaly:
         in time ends the run as fast as in time (the anomaly would crawl through it, with
         steps of 1e-21 s for ``e = 0.9999999``, instead); elsewhere the floor stays far below
         any step taken (~1e-13 rad for ``e = 0.99`` over 10 orbits)."""
-        return 10.0 * _EPS * max(abs(t0), abs(t_end)) * self.n / (1.0 - self.e)
+        return 10.0 * kd.EPS * max(abs(t0), abs(t_end)) * self.n / (1.0 - self.e)
 
     def first_step(self, step):
         """A first step ``step`` in time as one in the anomaly, at the start."""

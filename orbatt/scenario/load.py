@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import copy
-import dataclasses
 import threading
 import warnings
 from collections import OrderedDict
@@ -241,14 +240,11 @@ def _fresh(x):
 
 def _copy_spec(spec: Spec) -> Spec:
     """A deep copy of ``spec`` (every field)."""
-    if type(spec) is Spec and _SPEC_FIELDS == set(vars(spec)):  # a plain dataclass: its fields copied directly
-        out = object.__new__(Spec)
-        out.__dict__.update({k: v if v.__class__ in _ATOMS else _fresh(v) for k, v in vars(spec).items()})
-        return out
-    return dataclasses.replace(spec, **{f.name: _fresh(getattr(spec, f.name)) for f in dataclasses.fields(spec)})
-
-
-_SPEC_FIELDS = {f.name for f in dataclasses.fields(Spec)}
+    # a plain dataclass: its fields copied into a new instance directly (dataclasses.replace
+    # runs __init__ and its checks again)
+    out = object.__new__(type(spec))
+    out.__dict__.update({k: v if v.__class__ in _ATOMS else _fresh(v) for k, v in vars(spec).items()})
+    return out
 
 
 #: leading bytes of binary formats a user may pass for a scenario by mistake
@@ -261,11 +257,8 @@ def read_scenario_text(path) -> str:
     """The text of a scenario file: UTF-8 (TOML's encoding), or a :class:`ScenarioError`
     naming the file (a binary or NetCDF file, another encoding, an unreadable file)."""
     try:
-        if isinstance(path, Path):  # what read_bytes reads, unbuffered (half its ~8 us)
-            with open(path, "rb", buffering=0) as f:
-                data = f.readall()
-        else:
-            data = Path(path).read_bytes()
+        with open(path, "rb", buffering=0) as f:  # what Path.read_bytes reads, unbuffered (half its ~8 us)
+            data = f.readall()
     except OSError as exc:
         raise ScenarioError(f"{path}: cannot read it ({exc.strerror or exc}); give a readable TOML file") from None
     for magic, what in _MAGIC.items():
