@@ -119,7 +119,8 @@ def _run(args, cold):
         from .coldstart import ENV_MODE
         from .progress import progress_callback
 
-        cold.start_warm_up()
+        if not cold.start_warm_up():  # no warm-up could start: compile now, in a process of its own
+            return cold.rerun_compiled(args.argv)
         if not args.quiet:
             print("orbatt: first run of this kind of scenario: the kernels run interpreted while they compile in "
                   f"the background for the next runs (same results; {ENV_MODE}=compile waits for the compiler "

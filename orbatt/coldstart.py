@@ -24,6 +24,11 @@ Measured on the shipped ``paper-keplerian`` with an empty cache (2-core machine)
 compiled before, 1.8 s interpreted, the same file contents bit for bit
 (``benchmarks/run.py``'s first-run rows).
 
+Where no stamp can be written (the stamp folder cannot be made or written: a read-only
+installation and home) or no warm-up can start, the run compiles in a process of its own
+instead: an interpreted run with no warm-up behind it would never switch, and a long study
+would run ~1000x slower to its end.
+
 ``ORBATT_COLD_START=compile`` turns this off (wait for the compiler, as with the Python API,
 which always compiles); a process that has already imported numba is never switched.
 """
@@ -36,6 +41,8 @@ import platform
 import subprocess
 import sys
 from pathlib import Path
+
+from .shipped import scenario_file
 
 __all__ = ["ENV_MODE", "ColdStart", "plan", "kernel_key", "fingerprint", "stamp_folder", "warm_up"]
 
@@ -77,30 +84,13 @@ def fingerprint() -> dict:
             "python": sys.version, "machine": f"{platform.machine()} {platform.processor()}"}
 
 
-def _scenario_file(scenario) -> Path | None:
-    """The TOML file of ``scenario`` (a path, or a shipped scenario's name), or None."""
-    p = Path(scenario)
-    if p.is_file():
-        return p
-    try:
-        from importlib.resources import files
-
-        folder = Path(str(files("orbatt.scenarios")))
-    except (ModuleNotFoundError, TypeError):  # pragma: no cover - a source checkout not installed
-        folder = _PACKAGE.parent / "scenarios"
-    for f in (folder / f"{scenario}.toml", folder / f"{str(scenario).lower()}.toml"):
-        if f.is_file():
-            return f
-    return None
-
-
 def kernel_key(scenario, method=None) -> str | None:
     """The kind of ``scenario`` as far as compiled kernels go: its method and the shape of its
     model (potential kind, orbit provider, torque and control tables, wheels), read from the
     TOML without validating it; None when the file cannot be read (the run then reports it)."""
     import tomllib
 
-    f = _scenario_file(scenario)
+    f = scenario_file(scenario)
     if f is None:
         return None
     try:
@@ -161,12 +151,14 @@ class ColdStart:
         except (OSError, ValueError):
             return False
 
-    def start_warm_up(self):
-        """Start the detached warm-up (:func:`warm_up`) unless one for this kind is running."""
+    def start_warm_up(self) -> bool:
+        """Start the detached warm-up (:func:`warm_up`) unless one for this kind is running;
+        False when none runs (it could not be started): the caller then runs compiled, since
+        an interpreted run with no warm-up behind it would never switch."""
         try:
             pid = int(self.lock.read_text())
             if pid != os.getpid() and _alive(pid):
-                return
+                return True
         except (OSError, ValueError):
             pass
         cmd = [sys.executable, "-m", "orbatt.coldstart", str(self.scenario), str(self.method or ""),
@@ -176,8 +168,12 @@ class ColdStart:
             self.process = subprocess.Popen(cmd, env=_compiled_env(), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                             stderr=subprocess.DEVNULL, start_new_session=True)
             self.lock.write_text(str(self.process.pid))
-        except OSError:  # no warm-up: the next run compiles in its own process, as without this
+        except OSError:  # no warm-up (or no lock: then a warm-up that cannot write its stamp)
+            if self.process is not None:
+                self.process.kill()
             self.process = None
+            return False
+        return True
 
     def progress(self, inner):
         """A progress callback for the interpreted run: ``inner`` (None or a callback), and
@@ -218,7 +214,20 @@ def plan(scenario, method=None) -> ColdStart | None:
     if key is None:
         return None
     cold = ColdStart(scenario, method, key, stamp_folder())
-    return None if cold.is_warm() else cold
+    if cold.is_warm() or not _writable(cold.folder):
+        return None  # warm; or no stamp can ever be written there: every run would interpret
+    return cold
+
+
+def _writable(folder: Path) -> bool:
+    """Whether ``folder`` exists or can be made, and files can be written in it (a read-only
+    installation and home, a full or read-only file system: no warm stamp can be written, so
+    first runs compile in their own process, as with ``ORBATT_COLD_START=compile``)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return False
+    return os.access(folder, os.W_OK | os.X_OK)
 
 
 def warm_up(scenario, method, stamp) -> int:

@@ -15,6 +15,7 @@ import pytest
 
 from orbatt import coldstart
 from orbatt.dataset import open_dataset
+from orbatt.shipped import shipped_file
 
 #: shipped scenarios whose interpreted run takes a few seconds (the others are checked by hand:
 #: the closing note of the cold-start work lists them)
@@ -119,7 +120,7 @@ def test_plan_interprets_only_a_cold_first_run(tmp_path):
     assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache, NUMBA_DISABLE_JIT="1") == "none"
     assert _plan(str(tmp_path / "missing.toml"), tmp_path, NUMBA_CACHE_DIR=cache) == "none"  # the run reports it
     stamp = tmp_path / "cache" / "orbatt" / f"warm-{key}.json"
-    stamp.parent.mkdir(parents=True)
+    stamp.parent.mkdir(parents=True, exist_ok=True)  # (plan made it: it checks a stamp can be written)
     fp = _fingerprint(tmp_path)
     stamp.write_text(json.dumps(fp))
     assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=cache) == "none"
@@ -132,7 +133,7 @@ def test_kernel_key_follows_the_model_not_the_numbers(tmp_path, shipped_outputs)
     assert kep == coldstart.kernel_key("paper-keplerian", "dop853")
     assert kep != coldstart.kernel_key("paper-keplerian", "splitting4")
     assert kep != coldstart.kernel_key("paper-torque-free")
-    text = (coldstart._scenario_file("paper-keplerian")).read_text()
+    text = shipped_file("paper-keplerian").read_text()
     other = tmp_path / "other.toml"
     other.write_text(text.replace('"400 kg km2"', '"410 kg km2"'))
     assert coldstart.kernel_key(other) == kep
@@ -155,3 +156,43 @@ def test_rerun_compiled_runs_the_same_command(tmp_path, shipped_outputs):
     assert cold.rerun_compiled(["run", "paper-torque-free", "-o", str(out), "--quiet"]) == 0
     with open_dataset(out) as a, open_dataset(shipped_outputs["paper-torque-free"]) as b:
         _same_values(a, b)
+
+
+def test_no_interpreted_run_where_no_stamp_can_be_written(tmp_path):
+    """A stamp folder that cannot be made (here: below a plain file; a read-only installation
+    and home alike): the run compiles in its own process instead of interpreting to its end."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=str(blocker / "cache")) == "none"
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=str(tmp_path / "fresh")) != "none"
+    assert not coldstart._writable(blocker / "cache") and coldstart._writable(tmp_path / "made" / "here")
+
+
+def test_a_warm_up_that_cannot_start_says_so(tmp_path, monkeypatch):
+    key = coldstart.kernel_key("paper-torque-free")
+    cold = coldstart.ColdStart("paper-torque-free", None, key, tmp_path)
+
+    def refuse(*args, **kwargs):
+        raise OSError("no processes left")
+
+    monkeypatch.setattr(coldstart.subprocess, "Popen", refuse)
+    assert cold.start_warm_up() is False and cold.process is None
+    # a warm-up of this kind already running (its pid in the lock): nothing started, and it will switch
+    cold.lock.write_text(str(os.getppid()))
+    assert cold.start_warm_up() is True and cold.process is None
+
+
+def test_shipped_names_and_paths_mean_one_file(tmp_path):
+    from orbatt.shipped import scenario_file, shipped_folder
+
+    f = shipped_folder() / "paper-keplerian.toml"
+    assert f.is_file()
+    for name in ("paper-keplerian", "paper-keplerian.toml", "PAPER-KEPLERIAN", "./paper-keplerian"):
+        assert shipped_file(name) == f or name.startswith("./"), name
+        assert scenario_file(name) == f, name
+    assert coldstart.kernel_key("paper-keplerian") == coldstart.kernel_key(f)
+    for name in ("no-such-scenario", "", "elsewhere/paper-keplerian", str(tmp_path / "paper-keplerian.toml")):
+        assert shipped_file(name) is None and scenario_file(name) is None, name
+    mine = tmp_path / "mine.toml"
+    mine.write_text(f.read_text())
+    assert scenario_file(mine) == mine

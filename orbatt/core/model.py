@@ -101,6 +101,10 @@ MAGNETIC = 5
 WHEELS = 6
 PD_CONTROL = 7
 BDOT_CONTROL = 8
+#: what each term kind is, in words (error messages: a method refusing the terms that act)
+KIND_DESCRIPTIONS = {HEAVY_TOP: "a heavy top", GRAVITY_GRADIENT: "the gravity gradient", DRAG: "aerodynamic drag",
+                     SRP: "solar radiation pressure", MAGNETIC: "a magnetic dipole", WHEELS: "reaction wheels",
+                     PD_CONTROL: "a PD control law", BDOT_CONTROL: "a B-dot control law"}
 
 #: columns of a ``terms`` row
 KIND, P0, P1, R0, R1, FLAGS = 0, 1, 2, 3, 4, 5

@@ -40,18 +40,12 @@ from .base import Method, register
 
 __all__ = ["Exact"]
 
-#: names of the term kinds (:mod:`orbatt.core.model`) for the refusal message
-_TERM_NAMES = {km.HEAVY_TOP: "a heavy top", km.GRAVITY_GRADIENT: "the gravity gradient",
-               km.DRAG: "aerodynamic drag", km.SRP: "solar radiation pressure",
-               km.MAGNETIC: "a magnetic dipole", km.WHEELS: "reaction wheels",
-               km.PD_CONTROL: "a PD control law", km.BDOT_CONTROL: "a B-dot control law"}
-
 
 def check_torque_free(name, terms):
     """Refuse a model with any term acting on the body (:class:`InputError`)."""
     if terms.shape[0] == 1:
         return
-    acting = [_TERM_NAMES.get(int(k), f"term kind {int(k)}") for k in terms[1:, km.KIND]]
+    acting = [km.KIND_DESCRIPTIONS.get(int(k), f"term kind {int(k)}") for k in terms[1:, km.KIND]]
     raise InputError(f"potential: method {name!r} solves only the torque-free rigid body (potential kind "
                      f"'torque-free', no torques, control or wheels), but {', '.join(acting)} "
                      f"act{'s' if len(acting) == 1 else ''} on the body here; use method = 'dop853' (or "

@@ -21,6 +21,7 @@ from .schema import Spec, parse
 from ..dataset.build import dataset_content
 from ..dataset.content import Content
 from ..propagation import propagate
+from ..shipped import shipped_file, shipped_folder
 
 __all__ = ["Scenario", "load_scenario", "shipped_scenarios", "read_scenario_text"]
 
@@ -135,14 +136,8 @@ class Scenario:
 
 def shipped_scenarios():
     """``[(name, description, path)]`` of the scenarios shipped with orbatt."""
-    from importlib.resources import files
-
-    try:
-        folder = files("orbatt.scenarios")
-    except ModuleNotFoundError:  # a source checkout used without installing: scenarios/ beside orbatt/
-        folder = Path(__file__).resolve().parent.parent.parent / "scenarios"
     out = []
-    for f in sorted(folder.iterdir(), key=lambda p: p.name):
+    for f in sorted(shipped_folder().iterdir(), key=lambda p: p.name):
         if f.name.endswith(".toml"):
             spec = parse(read_scenario_text(f), f.name)
             out.append((spec.name, spec.description, f))
@@ -169,12 +164,12 @@ def load_scenario(path) -> Scenario:
     """
     p = path if type(path) is _PATH else Path(path)  # (a Path is immutable: kept)
     if not p.is_file():
-        shipped = {name: f for name, _, f in shipped_scenarios()}
-        key = p.name[:-5] if p.name.endswith(".toml") else p.name
-        if key in shipped:
-            return Scenario(parse_scenario_text(read_scenario_text(shipped[key]), key), path=key)
+        f = shipped_file(str(p))
+        if f is not None:
+            key = f.name[:-5]
+            return Scenario(parse_scenario_text(read_scenario_text(f), key), path=key)
         raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
-                            f"{', '.join(sorted(shipped))}")
+                            f"{', '.join(sorted(name for name, _, _ in shipped_scenarios()))}")
     return Scenario(parse_scenario_text(read_scenario_text(p), str(p)), path=p)
 
 

@@ -214,6 +214,15 @@ def test_refuses_what_is_not_torque_free(free, sat):
         orbatt.propagate(body, s0, orbatt.TorqueFree(), t, method="exact", rtol=1.0)
 
 
+def test_every_term_kind_is_described():
+    """The refusal names what acts in words: every term kind of the kernel model has them."""
+    from orbatt.core import model as km
+
+    kinds = {km.HEAVY_TOP, *km.ORBIT_TERMS, *km.VELOCITY_TERMS, *km.TABLE_TERMS, *km.EXTENDED_KINDS}
+    assert set(km.KIND_DESCRIPTIONS) == kinds
+    assert all(isinstance(d, str) and d for d in km.KIND_DESCRIPTIONS.values())
+
+
 def test_scenario_refusal_names_the_method(tmp_path):
     text = (SCEN / "paper-heavy-top.toml").read_text()
     path = tmp_path / "top.toml"

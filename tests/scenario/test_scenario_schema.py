@@ -94,3 +94,17 @@ def test_quantity_strings_parsed_again_give_the_same_values_and_errors():
     for _ in range(2):
         with pytest.raises(ScenarioError, match=r"f\.toml: \[orbit\] a: '7000 s' has the wrong dimension"):
             parse_quantity(ctx, "[orbit] a", "7000 s", u.km, dimensionless=False)
+
+
+def test_load_scenario_by_name_and_a_missing_path(tmp_path):
+    """A shipped scenario by its name (any letter case, with or without ``.toml``); a path that
+    does not exist is refused, even when its last part is a shipped name (it is never taken for
+    the shipped file)."""
+    import orbatt
+
+    for name in ("paper-keplerian", "paper-keplerian.toml", "Paper-Keplerian"):
+        sc = orbatt.load_scenario(name)
+        assert sc.name == "paper-keplerian" and sc.text == GOOD
+    with pytest.raises(ScenarioError, match=r"no-such-folder/paper-keplerian.toml: no such scenario file; give a path "
+                                            r"to a TOML file or one of: .*paper-keplerian"):
+        orbatt.load_scenario(tmp_path / "no-such-folder" / "paper-keplerian.toml")
