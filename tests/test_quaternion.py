@@ -63,6 +63,21 @@ def test_scalar_kernel_matches_numpy(a, b):
     assert close(qalg.qmul(tuple(a), tuple(b)), qt.mul(a, b), np.linalg.norm(a) * np.linalg.norm(b))
 
 
+wide = st.floats(-1e150, 1e150, allow_nan=False, allow_infinity=False, allow_subnormal=True)
+
+
+@given(arrays(np.float64, 4, elements=wide), arrays(np.float64, 3, elements=wide))
+def test_products_with_a_pure_quaternion_are_qmul_exactly(a, v):
+    """qmul_pure / pure_qmul leave out the zero scalar part's products: the same numbers as
+    qmul (compared as values: an exact zero's sign may differ), also the compiled kernels."""
+    a, v = tuple(map(float, a)), tuple(map(float, v))
+    pure = (0.0,) + v
+    assert np.array_equal(qalg.qmul_pure.py_func(a, v), qalg.qmul.py_func(a, pure))
+    assert np.array_equal(qalg.pure_qmul.py_func(v, a), qalg.qmul.py_func(pure, a))
+    assert np.array_equal(qalg.qmul_pure(a, v), qalg.qmul(a, pure))
+    assert np.array_equal(qalg.pure_qmul(v, a), qalg.qmul(pure, a))
+
+
 def test_hamilton_convention_ijk():
     i, j, k = np.eye(4)[1:]
     assert np.array_equal(qt.mul(i, j), k)

@@ -24,7 +24,7 @@ from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import spline_eval, spline_eval_rate
 from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, orbit_at, orbit_radial, terms_at
-from .qalg import qconj, qmul
+from .qalg import qconj, qmul, qmul_pure
 from .torques import gradient_of_torque
 
 
@@ -119,9 +119,9 @@ def rhs_extended(s, y, inertia, terms, params, table, work, dy):
     w0 = wheel_row(terms)
     w = qmul(qconj(q), Q)
     omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
-    a = (0.0, 2.0 * omega[0], 2.0 * omega[1], 2.0 * omega[2])
-    qd = qmul(q, a)
-    Qd = qmul(Q, a)
+    a = (2.0 * omega[0], 2.0 * omega[1], 2.0 * omega[2])  # the pure quaternion (0, 2 omega)
+    qd = qmul_pure(q, a)
+    Qd = qmul_pure(Q, a)
     # the orbit once for the terms and the control law (an extended model has >= 1 term)
     t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
     _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)

@@ -20,7 +20,7 @@ from __future__ import annotations
 from ._jit import jit, jit_inline
 from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient, gradient_at, orbit_at, term_constants, term_value,
                     terms_lanes)
-from .qalg import qconj, qmul
+from .qalg import qconj, qmul, qmul_pure
 
 
 @jit_inline
@@ -33,8 +33,9 @@ def kinetic_rates(q, Q, inertia):
 @jit_inline
 def eq7(q, Q, a):
     """The kinetic part of eq. (7) for the rates ``a`` of :func:`kinetic_rates`:
-    ``(4 dq/dt, 4 dQ/dt + 4 G) = (q a, Q a)``."""
-    return qmul(q, a), qmul(Q, a)
+    ``(4 dq/dt, 4 dQ/dt + 4 G) = (q a, Q a)`` (``a`` pure: :func:`~orbatt.core.qalg.qmul_pure`)."""
+    v = (a[1], a[2], a[3])
+    return qmul_pure(q, v), qmul_pure(Q, v)
 
 
 def _rhs(s, y, inertia, terms, params, table, work, dy):

@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit import jit_inline
-from .qalg import qconj, qdot, qmul, qscale
+from .qalg import pure_qmul, qconj, qdot, qmul, qmul_pure, qscale
 
 TORQUE_FREE = 0
 HEAVY_TOP = 1
@@ -71,10 +71,11 @@ def _tangential(q, graw, degree):
 def heavy_top(q, params):
     """Heavy top, eq. (18) with the sign chosen in ``params[0]``. Returns ``(U, dU/dq)``."""
     smg = params[0]
-    X = (0.0, params[1], params[2], params[3])
+    X = (params[1], params[2], params[3])  # the pure quaternion (0, X)
     # U_raw = s Mg (q X q~)_3 ; grad U_raw = -2 s Mg s3 q X (pure quaternions s3, X)
-    w = qmul(qmul(q, X), qconj(q))
-    graw = qscale(-2.0 * smg, qmul((0.0, 0.0, 0.0, 1.0), qmul(q, X)))
+    qX = qmul_pure(q, X)
+    w = qmul(qX, qconj(q))
+    graw = qscale(-2.0 * smg, pure_qmul((0.0, 0.0, 1.0), qX))
     n2 = qdot(q, q)
     return smg * w[3] / n2, _tangential(q, graw, 2)
 
@@ -83,11 +84,10 @@ def heavy_top(q, params):
 def gravity_gradient(q, inertia, k, xhat):
     """MacCullagh potential, eq. (20), for ``k = GM / r^3`` and radial unit vector ``xhat``
     (inertial components). Returns ``(U, dU/dq)``."""
-    X = (0.0, xhat[0], xhat[1], xhat[2])
-    xb = qmul(qmul(qconj(q), X), q)
-    Y = (0.0, inertia[0] * xb[1], inertia[1] * xb[2], inertia[2] * xb[3])
-    uraw = 1.5 * k * (xb[1] * Y[1] + xb[2] * Y[2] + xb[3] * Y[3])
-    graw = qscale(-6.0 * k, qmul(qmul(X, q), Y))
+    xb = qmul(qmul_pure(qconj(q), xhat), q)
+    Y = (inertia[0] * xb[1], inertia[1] * xb[2], inertia[2] * xb[3])  # the pure quaternion (0, I xb)
+    uraw = 1.5 * k * (xb[1] * Y[0] + xb[2] * Y[1] + xb[3] * Y[2])
+    graw = qscale(-6.0 * k, qmul_pure(pure_qmul(xhat, q), Y))
     n2 = qdot(q, q)
     return uraw / (n2 * n2), _tangential(q, graw, 4)
 

@@ -25,6 +25,35 @@ def qmul(a, b):
 
 
 @jit_inline
+def qmul_pure(a, v):
+    """``a (0, v)`` for a 3-vector ``v``: :func:`qmul` with the products of the zero scalar
+    part left out, the remaining terms summed in :func:`qmul`'s order, hence the same numbers
+    (``x + 0 = x``; at most the sign of an exact zero differs) for 8 fewer operations."""
+    a0, a1, a2, a3 = a
+    v1, v2, v3 = v
+    return (
+        -(a1 * v1) - a2 * v2 - a3 * v3,
+        a0 * v1 + a2 * v3 - a3 * v2,
+        a0 * v2 - a1 * v3 + a3 * v1,
+        a0 * v3 + a1 * v2 - a2 * v1,
+    )
+
+
+@jit_inline
+def pure_qmul(v, b):
+    """``(0, v) b`` for a 3-vector ``v``: :func:`qmul` without the zero scalar part's products,
+    as :func:`qmul_pure` (the same numbers)."""
+    v1, v2, v3 = v
+    b0, b1, b2, b3 = b
+    return (
+        -(v1 * b1) - v2 * b2 - v3 * b3,
+        v1 * b0 + v2 * b3 - v3 * b2,
+        -(v1 * b3) + v2 * b0 + v3 * b1,
+        v1 * b2 - v2 * b1 + v3 * b0,
+    )
+
+
+@jit_inline
 def qconj(a):
     """Conjugate ``(a0, -a1, -a2, -a3)``."""
     return (a[0], -a[1], -a[2], -a[3])
