@@ -4,7 +4,7 @@
     python benchmarks/verner98.py [--repeats N]
 
 For the Keplerian gravity-gradient case (10 orbits) in the eccentric anomaly (default form)
-and in time, and for the torque-free case: for every grid rtol (= atol) from 1e-10 to 1e-14
+and in time, and for the torque-free case: for every grid rtol (= atol) from 1e-7 to 1e-14
 (4 per decade, ``run.RTOLS``) the steps, RHS evaluations, final attitude error against the
 case's reference, and the step loop's wall time (``stats['wall_time_s']``, best of
 ``repeats``, the two methods alternated A, B, A, B ... so that a busy machine slows both).
@@ -24,7 +24,7 @@ import orbatt  # noqa: E402
 from run import RTOLS, angle, free_case, kepler_case  # noqa: E402
 
 METHODS = ("dop853", "vern98")
-GRID = [r for r in RTOLS if 0.99e-14 <= r <= 1.01e-10]
+GRID = [r for r in RTOLS if 0.99e-14 <= r <= 1.01e-7]
 
 
 def measure(case, form, repeats):
