@@ -16,7 +16,7 @@ from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
 from .problem import KernelSpec
 
-__all__ = ["DOP853", "DOP853Lanes"]
+__all__ = ["DOP853", "DOP853Lanes", "Vern98"]
 
 #: counters summed into the statistics
 _COUNTS = {"steps": kd.CNT_STEPS, "rejected_steps": kd.CNT_REJECTED, "rhs_evaluations": kd.CNT_NFEV}
@@ -178,6 +178,22 @@ class DOP853(Method):
 
     def time_reached(self):
         return self._time(self.ST[:, kd.ST_T].min())
+
+
+@register
+class Vern98(DOP853):
+    """Verner's 9(8) pair (16 stages, :mod:`orbatt.core.verner98_coefficients`) in the
+    compiled step loop of :class:`DOP853` (same controller structure, exponent 1/9; error
+    ``|h| rms((b - bhat) . K / sk)``); lands on every output time."""
+
+    name = "vern98"
+    order = 9
+    extended = False
+    description = "compiled adaptive Verner 9(8) (16 stages), Hairer-style PI step-size control"
+
+    def start(self, problem):
+        super().start(problem)  # (extended models are refused before: extended = False)
+        self.one, self.batch = kd.advance_verner98, kd.advance_batch_verner98
 
 
 @register

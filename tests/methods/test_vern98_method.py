@@ -1,0 +1,127 @@
+"""method="vern98": Verner's 9(8) pair in the compiled step loop of orbatt.core.dop853
+(coefficients: tests/core/test_verner98.py). Agreement with the exact free body and with
+DOP853 on the Keplerian gravity gradient, invariants, ensembles, DOP853 unchanged."""
+from __future__ import annotations
+
+import astropy.units as u
+import numpy as np
+import pytest
+from method_cases import GG, I_FREE, PERIOD, Y0, angle, exact_free, random_data
+
+import orbatt
+from orbatt import canonical
+from orbatt.core import dop853 as kd
+from orbatt.core import model as km
+from orbatt.core import potentials as kp
+from orbatt.core import verner98_coefficients as vc
+from orbatt.core.hamiltonian import rhs
+from orbatt.errors import InputError
+
+
+def _run_kernel(advance, t_out, rtol, atol=None, max_step=np.inf, h0=0.0):
+    y = Y0.copy()
+    st, cnt, f0 = kd.new_state()
+    st[kd.ST_H] = h0
+    out = np.zeros((len(t_out), 8))
+    status = advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, I_FREE,
+                     *km.from_spec(0, np.zeros(1), np.zeros((0, 0))), kp.new_work(), rtol,
+                     rtol if atol is None else atol, max_step, 10**9, 10**9)
+    assert status == kd.DONE
+    return out, cnt
+
+
+def test_vern98_loop_is_the_tableau_with_fixed_steps():
+    """Loose tolerances, the step bounded by max_step = 12 / n: a fixed-step pair, equal to
+    round-off to the same steps taken by a plain numpy evaluation of the tableau
+    (orbatt.core.verner98_coefficients) on the same right-hand side; the error at t = 12
+    against the exact solution falls with n (the order itself is checked on the coefficients,
+    tests/core/test_verner98.py: the free body is pre-asymptotic here, ~8.4 over n = 8 -> 32)."""
+    T = 12.0
+    model = km.from_spec(0, np.zeros(1), np.zeros((0, 0)))
+    work = kp.new_work()
+
+    def f(t, y):
+        out = np.empty(8)
+        rhs(t, y, I_FREE, *model, work, out)
+        return out
+
+    q, _ = exact_free([T])
+    errs = []
+    for n in (8, 16, 32):
+        out, cnt = _run_kernel(kd.advance_verner98, [T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n)
+        assert cnt[kd.CNT_REJECTED] == 0 and cnt[kd.CNT_STEPS] == n and cnt[kd.CNT_NFEV] == 16 * n + 1
+        y = Y0.copy()
+        h = T / n
+        K = np.zeros((vc.N_STAGES, 8))
+        for k in range(n):
+            for s in range(vc.N_STAGES):
+                K[s] = f(k * h + vc.C[s] * h, y + h * (vc.A[s, :s] @ K[:s]))
+            y = y + h * (vc.B @ K)
+        np.testing.assert_allclose(out[-1], y, rtol=0, atol=1e-13)
+        errs.append(angle(out[-1, :4], q[0]))
+    assert np.log2(errs[0] / errs[-1]) / 2 > 7.5, errs
+
+
+def test_vern98_meets_tolerance_and_keeps_invariants(free):
+    body, s0 = free
+    t = np.linspace(0.0, 50.0, 11)
+    qx, Qx = exact_free(t)
+    for rtol, bound in ((1e-8, 1e-6), (1e-11, 1e-9), (1e-13, 1e-11)):
+        tr = orbatt.propagate(body, s0, orbatt.TorqueFree(), t, method="vern98", rtol=rtol, atol=rtol)
+        assert tr.method == "vern98" and tr.settings["order"] == 9
+        np.testing.assert_array_equal(tr.t, t)
+        assert angle(tr.q, qx).max() < bound
+        # |q| = 1, q.Q = 0 and the energy T, to the tolerance
+        assert np.abs(np.linalg.norm(tr.q, axis=-1) - 1.0).max() < 10 * bound
+        qQ = np.einsum("...i,...i", tr.q, tr.Q)  # (the printed Q(t0) has q.Q = -9.7e-8: DESIGN.md 3a.9)
+        assert np.abs(qQ - qQ[0]).max() < 10 * bound
+        T = canonical.kinetic_energy(tr.q, tr.Q, body.inertia_value)
+        assert np.abs(T / T[0] - 1.0).max() < 10 * bound
+
+
+@pytest.mark.parametrize("iv", ["auto", "time"])
+def test_vern98_agrees_with_dop853_on_keplerian_gravity_gradient(sat, iv):
+    """The paper's Keplerian case over 2 orbits: vern98 at rtol 1e-11 and dop853 at 1e-11
+    both within 1e-8 rad of dop853 at 1e-14; |q| = 1 and q.Q = 0 kept."""
+    body, s0 = sat
+    t = np.linspace(0.0, 2 * PERIOD, 5)
+    ref = orbatt.propagate(body, s0, GG, t, rtol=1e-14, atol=1e-14, independent_variable=iv)
+    v = orbatt.propagate(body, s0, GG, t, method="vern98", rtol=1e-11, atol=1e-11, independent_variable=iv)
+    d = orbatt.propagate(body, s0, GG, t, rtol=1e-11, atol=1e-11, independent_variable=iv)
+    assert v.settings["independent_variable"] == d.settings["independent_variable"]
+    assert angle(v.q, ref.q).max() < 1e-8 and angle(d.q, ref.q).max() < 1e-8
+    assert np.abs(v.Q - ref.Q).max() < 1e-8 * np.abs(ref.Q).max()
+    assert np.abs(np.linalg.norm(v.q, axis=-1) - 1.0).max() < 1e-10
+    qQ = np.einsum("...i,...i", v.q, v.Q)
+    assert np.abs(qQ - qQ[0]).max() < 1e-10 * np.abs(ref.Q).max()
+    # the same work-precision class: no more right-hand-side evaluations than dop853 here
+    assert v.stats["steps"] < d.stats["steps"]
+
+
+def test_vern98_ensemble_is_bitwise_one_by_one(sat):
+    body, _ = sat
+    q, g = random_data(6, seed=7)
+    states = orbatt.State.from_momentum(body, q, g)
+    t = np.array([0.0, 0.5 * PERIOD, PERIOD])
+    ens = orbatt.propagate(body, states, GG, t, method="vern98", rtol=1e-10, atol=1e-10)
+    assert ens.q.shape == (6, 3, 4)
+    for e in range(6):
+        one = orbatt.propagate(body, orbatt.State.from_momentum(body, q[e], g[e]), GG, t, method="vern98", rtol=1e-10, atol=1e-10)
+        np.testing.assert_array_equal(ens.q[e], one.q)
+        np.testing.assert_array_equal(ens.Q[e], one.Q)
+
+
+def test_vern98_dop853_tableau_unchanged():
+    """The DOP853 loop runs the DOP853 tableau; the pairs differ."""
+    assert kd.TABLEAUS["dop853"][0] == 12 and kd.TABLEAUS["verner98"][0] == 16
+    a, _ = _run_kernel(kd.advance, [5.0], rtol=1e-10)
+    b, _ = _run_kernel(kd.advance_verner98, [5.0], rtol=1e-10)
+    assert 0.0 < angle(a[-1, :4], b[-1, :4]) < 1e-8
+
+
+def test_vern98_refuses_extended_models():
+    wheel = orbatt.ReactionWheel([1.0, 0.0, 0.0], "0.01 kg m2")
+    rw = orbatt.RigidBody([10.0, 12.0, 14.0] * u.kg * u.m**2, wheels=[wheel])
+    s_rw = orbatt.State.from_omega(rw, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.01] * u.rad / u.s)
+    with pytest.raises(InputError, match="method: 'vern98' cannot integrate reaction wheels.*'dop853'"):
+        orbatt.propagate(rw, s_rw, orbatt.TorqueFree(), [0.0, 1.0], method="vern98")
