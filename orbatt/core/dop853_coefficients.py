@@ -12,7 +12,7 @@ Entries not listed are zero.
 """
 from __future__ import annotations
 
-import numpy as np
+from .butcher import matrix, sparse_rows, vector
 
 N_STAGES = 12
 ORDER = 8
@@ -102,41 +102,17 @@ er   12       -0.2235530786388629525884427845e-1
 """
 
 
-def _entries(name):
-    """``[(indices (0-based), value)]`` of the table's lines named ``name``, in table order."""
-    out = []
-    for line in _TABLE.splitlines():
-        fields = line.split()
-        if fields and fields[0] == name:
-            out.append((tuple(int(i) - 1 for i in fields[1:-1]), float(fields[-1])))
-    return out
-
-
-def _vector(name):
-    v = np.zeros(N_STAGES)
-    for (i,), value in _entries(name):
-        v[i] = value
-    return v
-
-
 #: nodes: stage ``s`` evaluates ``f`` at ``t + C[s] h``
-C = _vector("c")
+C = vector(_TABLE, "c", N_STAGES)
 #: the Butcher tableau (strictly lower triangular)
-A = np.zeros((N_STAGES, N_STAGES))
-for (_i, _j), _value in _entries("a"):
-    A[_i, _j] = _value
+A = matrix(_TABLE, "a", N_STAGES)
 #: weights of the 8th-order solution ``y_new = y + h sum(B_i K_i)``
-B = _vector("b")
+B = vector(_TABLE, "b", N_STAGES)
 #: 3rd-order error estimate ``B - bhh``
-E3 = B - _vector("bhh")
+E3 = B - vector(_TABLE, "bhh", N_STAGES)
 #: 5th-order error estimate (Hairer's ``er1, er6..er12``)
-E5 = _vector("er")
+E5 = vector(_TABLE, "er", N_STAGES)
 
 # The nonzero entries of A, row by row (stage s uses A_VAL[A_PTR[s]:A_PTR[s+1]] on the
 # stages A_COL[...]): the stage loop skips the zeros of the tableau.
-A_PTR = np.zeros(N_STAGES + 1, dtype=np.int64)
-A_COL = np.array([j for s in range(N_STAGES) for j in range(s) if A[s, j] != 0.0], dtype=np.int64)
-A_VAL = np.array([A[s, j] for s in range(N_STAGES) for j in range(s) if A[s, j] != 0.0])
-for _s in range(N_STAGES):
-    A_PTR[_s + 1] = A_PTR[_s] + np.count_nonzero(A[_s, :_s])
-del _s, _i, _j, _value
+A_PTR, A_COL, A_VAL = sparse_rows(A)

@@ -22,7 +22,7 @@ zero; ``C`` of stages 15 and 16 is 1.
 """
 from __future__ import annotations
 
-import numpy as np
+from .butcher import matrix, sparse_rows, vector
 
 N_STAGES = 16
 #: the order of the propagated solution (9) and of the embedded one (8)
@@ -142,40 +142,16 @@ c      16      1.0
 """
 
 
-def _entries(name):
-    """``[(indices (0-based), value)]`` of the table's lines named ``name``, in table order."""
-    out = []
-    for line in _TABLE.splitlines():
-        fields = line.split()
-        if fields and fields[0] == name:
-            out.append((tuple(int(i) - 1 for i in fields[1:-1]), float(fields[-1])))
-    return out
-
-
-def _vector(name):
-    v = np.zeros(N_STAGES)
-    for (i,), value in _entries(name):
-        v[i] = value
-    return v
-
-
 #: nodes: stage ``s`` evaluates ``f`` at ``t + C[s] h``
-C = _vector("c")
+C = vector(_TABLE, "c", N_STAGES)
 #: the Butcher tableau (strictly lower triangular)
-A = np.zeros((N_STAGES, N_STAGES))
-for (_i, _j), _value in _entries("a"):
-    A[_i, _j] = _value
+A = matrix(_TABLE, "a", N_STAGES)
 #: weights of the 9th-order solution ``y_new = y + h sum(B_i K_i)``
-B = _vector("b")
+B = vector(_TABLE, "b", N_STAGES)
 #: weights of the embedded 8th-order solution
-BHAT = _vector("bhat")
+BHAT = vector(_TABLE, "bhat", N_STAGES)
 #: the error estimate ``y_new - y_hat = h sum(E_i K_i)``
 E = B - BHAT
 
 # The nonzero entries of A, row by row (as in dop853_coefficients)
-A_PTR = np.zeros(N_STAGES + 1, dtype=np.int64)
-A_COL = np.array([j for s in range(N_STAGES) for j in range(s) if A[s, j] != 0.0], dtype=np.int64)
-A_VAL = np.array([A[s, j] for s in range(N_STAGES) for j in range(s) if A[s, j] != 0.0])
-for _s in range(N_STAGES):
-    A_PTR[_s + 1] = A_PTR[_s] + np.count_nonzero(A[_s, :_s])
-del _s, _i, _j, _value
+A_PTR, A_COL, A_VAL = sparse_rows(A)
