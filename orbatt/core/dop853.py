@@ -25,8 +25,8 @@ last failure was non-finite, else :data:`STEP_TOO_SMALL`). The controller, the l
 output times and Hairer's initial step are inline helpers shared by the single and the lane
 loops.
 
-Verner's 9(8) pair (:data:`advance_verner98`, :data:`advance_batch_verner98`, the rigid body;
-coefficients: :mod:`orbatt.core.verner98_coefficients`) runs in the same loop: 16 stages, no
+Verner's 9(8) pair (:data:`advance_verner98`, :data:`advance_batch_verner98` and their
+``_wide`` forms for extended models; coefficients: :mod:`orbatt.core.verner98_coefficients`) runs in the same loop: 16 stages, no
 FSAL (the first stage of the next step is evaluated on acceptance, as DOP853's FSAL stage),
 error ``err = |h| sqrt(e / n)``, ``e = sum(((E . K)_i / sk_i)^2)`` with ``E = b - bhat``, and
 the same controller with ``err^(1/9)`` (:func:`controller9`). On the Keplerian benchmark it needs
@@ -70,7 +70,7 @@ from .model import next_breakpoint
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
 __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "advance_verner98",
-           "advance_batch_verner98", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
+           "advance_wide_verner98", "advance_batch_verner98", "advance_batch_wide_verner98", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
            "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
            "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE", "EPS", "CNT_STEPS",
            "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
@@ -523,12 +523,14 @@ advance = _advance_of(NDIM, False)
 advance_wide = _advance_of(0, True)
 #: the rigid body's step loop with Verner's 9(8) pair (:mod:`orbatt.core.verner98_coefficients`)
 advance_verner98 = _advance_of(NDIM, False, "verner98")
+#: :data:`advance_wide` with Verner's 9(8) pair (compiled on first use only)
+advance_wide_verner98 = _advance_of(0, True, "verner98")
 
 
 def _batch_of(extended, tableau="dop853"):
-    """The ensemble driver over members of :func:`advance`, (``extended``) :func:`advance_wide`
-    or (``tableau="verner98"``, the rigid body) :func:`advance_verner98` (constants of the
-    closure, as in :func:`_advance_of`)."""
+    """The ensemble driver over members of :func:`advance` or (``extended``) :func:`advance_wide`,
+    or with ``tableau="verner98"`` of :func:`advance_verner98` or :func:`advance_wide_verner98`
+    (constants of the closure, as in :func:`_advance_of`)."""
     verner = tableau == "verner98"
 
     def advance_batch(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK,
@@ -548,7 +550,11 @@ def _batch_of(extended, tableau="dop853"):
             if CNT[e, CNT_IOUT] >= t_out.shape[0]:
                 status[e] = DONE
                 continue
-            if verner:
+            if verner and extended:
+                status[e] = advance_wide_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False,
+                                                  inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
+                                                  max_steps, budget)
+            elif verner:
                 status[e] = advance_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
                                              terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
             elif extended:
@@ -563,5 +569,6 @@ def _batch_of(extended, tableau="dop853"):
 
 advance_batch = _batch_of(False)
 advance_batch_wide = _batch_of(True)
-#: :data:`advance_batch` with Verner's 9(8) pair (the rigid body)
+#: :data:`advance_batch` and :data:`advance_batch_wide` with Verner's 9(8) pair
 advance_batch_verner98 = _batch_of(False, "verner98")
+advance_batch_wide_verner98 = _batch_of(True, "verner98")

@@ -35,6 +35,8 @@ class DOP853(Method):
                "independent_variable": "'auto' (default: the eccentric anomaly on a Keplerian orbit, else the "
                                        "time), 'eccentric-anomaly' or 'time'"}
     description = "compiled adaptive Dormand-Prince 8(5,3), Hairer's step-size control"
+    #: the compiled loops (one trajectory, ensemble) of the rigid body and of extended models
+    loops = {False: (kd.advance, kd.advance_batch), True: (kd.advance_wide, kd.advance_batch_wide)}
 
     def __init__(self, **kw):
         super().__init__(**kw)
@@ -104,8 +106,7 @@ class DOP853(Method):
         width = p.y0.shape[1]
         # the rigid body's loop, or the one of extended models (wheels, control laws)
         extended = (p.kernel.terms[0, km.FLAGS] & km.EXTENDED) != 0 or width != kd.NDIM
-        self.one, self.batch = ((kd.advance_wide, kd.advance_batch_wide) if extended else
-                                (kd.advance, kd.advance_batch))
+        self.one, self.batch = self.loops[extended]
         self.ST, self.CNT, self.F0 = kd.new_state(E, width)
         self.WORK = kp.new_work(E)
         self.status = np.empty(E, dtype=np.int64)  # np.full without its Python-level wrapper
@@ -188,12 +189,9 @@ class Vern98(DOP853):
 
     name = "vern98"
     order = 9
-    extended = False
     description = "compiled adaptive Verner 9(8) (16 stages), Hairer-style PI step-size control"
-
-    def start(self, problem):
-        super().start(problem)  # (extended models are refused before: extended = False)
-        self.one, self.batch = kd.advance_verner98, kd.advance_batch_verner98
+    loops = {False: (kd.advance_verner98, kd.advance_batch_verner98),
+             True: (kd.advance_wide_verner98, kd.advance_batch_wide_verner98)}
 
 
 @register
