@@ -30,3 +30,17 @@ def test_heyoka_agrees_with_both_forms():
     assert angle(q_e, q_hy) < 1e-11
     assert angle(q_t, q_hy) < 1e-11
     assert angle(q_e, q_t) < 1e-11
+
+
+def test_heyoka_agrees_with_vern98():
+    """Verner's 9(8) pair (method vern98) at rtol 1e-14 against heyoka at 1e-15, 10 orbits.
+    Measured: 4.9e-13 rad in the anomaly, 1.4e-12 in time."""
+    T = 10 * hm.PERIOD
+    _, ta = hm.integrator(hm.KEPLER_INERTIA, True, 1e-15)
+    q_hy = np.asarray(hm.propagate(ta, T))
+    body = orbatt.RigidBody(I_SAT)
+    s0 = orbatt.State(body, hm.Q0, hm.P0)
+    for iv in ("auto", "time"):
+        q_v = orbatt.propagate(body, s0, GG, [0.0, T], method="vern98", rtol=1e-14, atol=1e-18,
+                               independent_variable=iv).q[-1]
+        assert angle(q_v, q_hy) < 1e-11, iv
