@@ -20,6 +20,15 @@ from .errors import InputError
 from .orbits.base import OrbitProvider
 
 
+def kernel_backed(method):
+    """Mark a :class:`Potential` method that computes from :meth:`Potential.kernel_model` alone
+    (as the compiled kernels do, after checks that depend on the body and the times only):
+    :func:`evaluate_members` then evaluates an ensemble in one compiled call. A subclass that
+    overrides ``evaluate`` or ``term_torques`` without this mark gets a call per member."""
+    method.kernel_backed = True
+    return method
+
+
 def _read_only(a):
     """``a`` with its ``writeable`` flag cleared (a potential's parameters are fixed)."""
     a.flags.writeable = False
@@ -74,10 +83,14 @@ class Potential:
     #: ``None`` (defined at all times) or ``(t_first, t_last)``: the times the potential can
     #: be evaluated at (in the body's time unit); :func:`orbatt.propagate` refuses to leave it
     time_span = None
+    #: ``term_torques`` gives each kernel term's torque (``orbatt.core.model.evaluate_terms``);
+    #: False: the one total torque of ``evaluate``
+    torques_per_term = False
 
     def check_body(self, body: RigidBody):
         """Raise :class:`InputError` if this potential cannot act on ``body``."""
 
+    @kernel_backed
     def evaluate(self, body: RigidBody, t, q):
         """``(U, dU/dq, torque)`` at times ``t (N,)`` and attitudes ``q (N, 4)``.
 
@@ -122,6 +135,7 @@ class Potential:
     #: for a potential that is not a torque of the environment)
     term_names: list = []
 
+    @kernel_backed
     def term_torques(self, body, t, q):
         """Each term's body torque ``(N, len(term_names), 3)`` in the body's energy unit (kg
         km^2 s^-2 = 1e6 N m) at the times ``t`` and attitudes ``q (N, 4)``."""
@@ -246,6 +260,7 @@ class GravityGradient(Potential):
             raise InputError("body: dimensional inertia with a dimensionless orbit (plain a and gm); give the "
                              "inertia as plain numbers too (normalized units), or a and gm as Quantities")
 
+    @kernel_backed
     def evaluate(self, body, t, q):
         """``(U, dU/dq, torque)`` at times ``t`` (s since the orbit's epoch) and attitudes
         ``q (N, 4)``: ``U`` in kg km^2 s^-2, ``dU/dq`` ``(N, 4)``, body torque ``(N, 3)`` in
@@ -264,3 +279,49 @@ class GravityGradient(Potential):
 
     def __repr__(self):
         return f"GravityGradient(orbit={self.orbit!r})"
+
+
+def member_body(body, inertia):
+    """The body of an ensemble member with principal moments ``inertia`` (the body's internal
+    unit): ``body`` itself when they are its own."""
+    if np.array_equal(inertia, body.inertia_value):
+        return body
+    return RigidBody(inertia.tolist() if body.dimensionless else inertia * body.inertia_unit)
+
+
+def energy_and_torques(potential, body, t, q, want_tau):
+    """``(U (N,), tau)``: the potential energy at the times ``t (N,)`` and attitudes ``q (N,
+    4)`` and, if ``want_tau``, each torque term (``(N, terms, 3)``,
+    :meth:`Potential.term_torques`), else None (the body's energy unit). A potential whose
+    terms are its own torque (the base ``term_torques``) is evaluated once."""
+    if want_tau and getattr(type(potential), "term_torques", None) is Potential.term_torques:
+        U, _, torque = potential.evaluate(body, t, q)
+        tau = np.asarray(torque, dtype=np.float64)[:, None, :]
+    else:
+        U, _, _ = potential.evaluate(body, t, q)
+        tau = potential.term_torques(body, t, q) if want_tau else None
+    return np.asarray(U, dtype=np.float64).reshape(t.shape), tau
+
+
+def evaluate_members(potential, body, inertia, t, q, want_tau):
+    """:func:`energy_and_torques` of each member of an ensemble: ``(U (E, N), tau (E, N, terms,
+    3) or None)`` at the times ``t (N,)`` and attitudes ``q (E, N, 4)`` of members of principal
+    moments ``inertia (E, 3)`` (``body``'s internal unit; ``body``: the ensemble's body, for the
+    checks). Each member's numbers are those of :func:`energy_and_torques` on its own body.
+
+    A :class:`Potential` whose ``evaluate`` and ``term_torques`` are :func:`kernel_backed` is
+    checked once (``evaluate`` of the first member) and evaluated in one compiled call
+    (:func:`orbatt.core.model.evaluate_members`): 10^4 members of the Keplerian case in ~0.02 s
+    instead of ~0.2 s of a call per member. Any other potential: a call per member."""
+    cls = type(potential)
+    if isinstance(potential, Potential) and all(getattr(getattr(cls, name), "kernel_backed", False)
+                                                for name in ("evaluate", "term_torques")):
+        t = np.ascontiguousarray(t, dtype=np.float64)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        potential.evaluate(body, t, q[0])  # what evaluate checks (the body, the times), once
+        U, tau = km.evaluate_members(t, q, np.ascontiguousarray(inertia, dtype=np.float64),
+                                     *potential.kernel_model(), potential.torques_per_term, want_tau)
+        return U, (tau if want_tau else None)
+    members = [energy_and_torques(potential, member_body(body, inertia[e]), t, q[e], want_tau)
+               for e in range(q.shape[0])]
+    return np.stack([m[0] for m in members]), (np.stack([m[1] for m in members]) if want_tau else None)

@@ -28,7 +28,7 @@ from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sam
 from .control import BDotControl, PDControl
 from .errors import InputError
 from .orbits.base import OrbitProvider
-from .potentials import Potential
+from .potentials import Potential, kernel_backed
 
 __all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES"]
 
@@ -140,6 +140,7 @@ class EnvironmentTorques(Potential):
     """
 
     name = "environment"
+    torques_per_term = True  # term_torques: each term (orbatt.core.model.evaluate_terms)
     dimensionless = False
 
     def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
@@ -259,10 +260,12 @@ class EnvironmentTorques(Potential):
         if body.dimensionless:
             raise InputError("body: environment torques need a dimensional body (inertia with units)")
 
+    @kernel_backed
     def evaluate(self, body, t, q):
         self.check_body(body)
         return super().evaluate(body, t, q)
 
+    @kernel_backed
     def term_torques(self, body, t, q):
         """Each term's body torque ``(N, n_terms, 3)`` (kg km^2 s^-2 = 1e6 N m) at the times ``t``
         (s) and attitudes ``q (N, 4)``."""

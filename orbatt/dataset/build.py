@@ -22,13 +22,12 @@ from astropy import units as u
 
 from .. import canonical as cn
 from .. import quaternion as qt
-from ..body import RigidBody
 from .control import control_variables, wheel_coordinates
 from ..epoch import iso_epoch
 from ..errors import InputError
 from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
-from ..potentials import Potential
+from ..potentials import energy_and_torques, evaluate_members
 from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from ..version import __version__
 from .content import Content, Var
@@ -362,12 +361,9 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     # U and the torque terms from one evaluation of the potential where it can give both
     want_tau = bool(getattr(tr.potential, "term_names", None)) and not dimless
     if ens:
-        members = [_energy_and_torques(tr.potential, _member_body(body, inertia[e]), t, q[e], want_tau)
-                   for e in range(q.shape[0])]
-        Upot = np.stack([m[0] for m in members])
-        tau = np.stack([m[1] for m in members]) if want_tau else None
+        Upot, tau = evaluate_members(tr.potential, body, inertia, t, q, want_tau)
     else:
-        Upot, tau = _energy_and_torques(tr.potential, body, t, q, want_tau)
+        Upot, tau = energy_and_torques(tr.potential, body, t, q, want_tau)
     phi, theta, psi = qt.to_euler313(q)
     e313 = _columns(phi, theta, psi)
 
@@ -486,23 +482,3 @@ def _torque_variables(potential, tau, t, tdims):
         dims, unit, long_name, extra = _FIELD_VARIABLES[key]
         out[key] = _var(("time",) + dims, values, unit, long_name, **extra)
     return out
-
-
-def _member_body(body, inertia):
-    """The body of an ensemble member with principal moments ``inertia`` (internal unit)."""
-    if np.array_equal(inertia, body.inertia_value):
-        return body
-    return RigidBody(inertia.tolist() if body.dimensionless else inertia * body.inertia_unit)
-
-
-def _energy_and_torques(potential, body, t, q, want_tau):
-    """``(U (N,), tau)``: the potential energy at ``(t, q)`` and, if ``want_tau``, each torque
-    term (``(N, terms, 3)``, :meth:`~orbatt.potentials.Potential.term_torques`), else None. A
-    potential whose terms are its own torque (the base ``term_torques``) is evaluated once."""
-    if want_tau and getattr(type(potential), "term_torques", None) is Potential.term_torques:
-        U, _, torque = potential.evaluate(body, t, q)
-        tau = np.asarray(torque, dtype=np.float64)[:, None, :]
-    else:
-        U, _, _ = potential.evaluate(body, t, q)
-        tau = potential.term_torques(body, t, q) if want_tau else None
-    return np.asarray(U, dtype=np.float64).reshape(t.shape), tau
