@@ -200,3 +200,48 @@ def print_environment_ensemble(rows, n_members, fmt_t):
         print(f"{label:<34} {setting:<42} {err:9.1e} {fmt_t(wall):>9} {rate:14.0f} {rate / base:11.2f}x")
     print("  (peer: the same members with the gravity gradient alone, same run; heyoka has no tabulated "
           "environment to compare with)")
+
+
+def ensemble_dataset(n_members, repeats, median_time):
+    """What a user of an ensemble calls: ``propagate`` (``dop853-lanes``, the shipped
+    ``paper-keplerian`` over one orbit, 11 outputs) and ``to_dataset`` of its result, beside the
+    Dataset's energy and torques by one call per member (``potentials.energy_and_torques``, the
+    path before ``potentials.evaluate_members``) and by the one compiled call. Rows ``(what,
+    time)``."""
+    from orbatt.dataset import to_dataset
+    from orbatt.potentials import energy_and_torques, evaluate_members, member_body
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = orbatt.load_scenario("paper-keplerian")
+    rng = np.random.default_rng(1)
+    q0 = qt.normalize(rng.normal(size=(n_members, 4)))
+    g0 = sc.state0.g * (1.0 + 0.1 * rng.normal(size=(n_members, 3)))
+    states = orbatt.State.from_momentum(sc.body, q0, g0)
+    period = sc.orbit.period_value
+    t = np.linspace(0.0, period, 11)
+    kw = {"method": "dop853-lanes", "rtol": 1e-10, "atol": 1e-10}
+    tr = orbatt.propagate(sc.body, states, sc.potential, t, **kw)
+    to_dataset(tr)  # compiled kernels loaded
+    tp, _ = median_time(lambda: orbatt.propagate(sc.body, states, sc.potential, t, **kw), repeats, budget_s=3.0)
+    td, _ = median_time(lambda: to_dataset(tr), repeats, budget_s=3.0)
+    inertia = np.broadcast_to(sc.body.inertia_value, (n_members, 3)).copy()
+
+    def per_member():
+        return [energy_and_torques(sc.potential, member_body(sc.body, inertia[e]), tr.t, tr.q[e], True)
+                for e in range(n_members)]
+
+    tm, _ = median_time(per_member, repeats, budget_s=3.0)
+    te, _ = median_time(lambda: evaluate_members(sc.potential, sc.body, inertia, tr.t, tr.q, True), repeats,
+                        budget_s=3.0)
+    return [("propagate (dop853-lanes, rtol 1e-10)", tp), ("to_dataset", td),
+            ("  its energy and torques: a call per member", tm), ("  its energy and torques: one compiled call", te)]
+
+
+def print_ensemble_dataset(rows, n_members, fmt_t):
+    print(f"\n## Ensemble end to end (paper-keplerian, {n_members} members, one orbit, 11 outputs)\n")
+    base = rows[2][1]
+    for what, tm in rows:
+        ratio = f"{base / tm:8.1f}x" if what.startswith("  its") else ""
+        print(f"{what:<48} {fmt_t(tm):>10} {ratio}")
+    print(f"{'propagate + to_dataset':<48} {fmt_t(rows[0][1] + rows[1][1]):>10}")

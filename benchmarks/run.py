@@ -767,6 +767,8 @@ def main(argv=None):
         ensembles(kep, sizes, args.repeats)
         if hy is not None:
             heyoka_ensemble(kep, sizes, args.repeats)
+        n_ens = 10_000 if args.quick else 100_000
+        end_to_end.print_ensemble_dataset(end_to_end.ensemble_dataset(n_ens, args.repeats, median_time), n_ens, fmt_t)
         n_env = 200 if args.quick else 1000  # the environment needs rtol 1e-14 .. 3e-15 for 1e-6 rad (end_to_end.py)
         end_to_end.print_environment_ensemble(
             end_to_end.environment_ensemble(n_env, args.repeats, median_time, angle, RTOLS), n_env, fmt_t)
