@@ -349,6 +349,11 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
 
     if dimless and epoch is not None:
         raise InputError("epoch: a dimensionless problem has no calendar epoch; leave it out")
+    if not callable(getattr(tr.potential, "evaluate", None)):
+        raise InputError(f"potential: {type(tr.potential).__name__} has no evaluate(body, t, q), which the Dataset's "
+                         "potential energy needs (orbatt.propagate takes any object with a kernel kind, params and "
+                         "table); propagate with an orbatt Potential (e.g. orbatt.GravityGradient(orbit)) for a "
+                         "Dataset, or use the Trajectory's t, q, Q")
     orbit = tr.orbit
     if epoch is None and orbit is not None and not dimless:
         epoch = getattr(orbit, "epoch", None)

@@ -117,3 +117,16 @@ def test_kernel_backed_marks_the_method():
             return super().evaluate(body, t, q)
 
     assert Mine.evaluate.kernel_backed and Mine.term_torques.kernel_backed
+
+
+def test_a_kernel_specification_without_evaluate_is_refused_by_name():
+    """propagate takes any object with a kernel kind, params and table; its Dataset needs the
+    potential energy: a clear refusal, not an AttributeError."""
+    class Spec:
+        kind, params, table = orbatt.TorqueFree.kind, orbatt.TorqueFree.params, orbatt.TorqueFree.table
+
+    body = orbatt.RigidBody([1.25, 1.0, 0.75])
+    tr = orbatt.propagate(body, orbatt.State.from_omega(body, [1.0, 0.0, 0.0, 0.0], [0.1, 0.2, 0.3]), Spec(),
+                          [0.0, 1.0])
+    with pytest.raises(orbatt.InputError, match=r"potential: Spec has no evaluate\(body, t, q\).*orbatt Potential"):
+        D.to_dataset(tr)
