@@ -33,7 +33,8 @@ the same controller with ``err^(1/9)`` (:func:`controller9`). On the Keplerian b
 ~17 % fewer right-hand-side evaluations than DOP853 at 1e-9 rad, none fewer at 1e-6 rad, and
 more on the torque-free body (``benchmarks/verner98.py``).
 
-Breakpoints: steps also land on the knots of the model's environment tables
+Breakpoints: steps also land on the knots of the model's tables (a sampled orbit's samples,
+the environment tables)
 (:func:`orbatt.core.model.next_breakpoint`), where the right-hand side's third derivative
 jumps; nothing is recorded there.
 
