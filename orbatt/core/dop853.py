@@ -26,17 +26,17 @@ output times and Hairer's initial step are inline helpers shared by the single a
 loops.
 
 Verner's 9(8) pair (:data:`advance_verner98`, :data:`advance_batch_verner98` and their
-``_wide`` forms for extended models; coefficients: :mod:`orbatt.core.verner98_coefficients`) runs in the same loop: 16 stages, no
+``_wide`` forms for extended models; coefficients: :mod:`orbatt.core.verner98_coefficients`)
+runs in the same loop: 16 stages, no
 FSAL (the first stage of the next step is evaluated on acceptance, as DOP853's FSAL stage),
 error ``err = |h| sqrt(e / n)``, ``e = sum(((E . K)_i / sk_i)^2)`` with ``E = b - bhat``, and
 the same controller with ``err^(1/9)`` (:func:`controller9`). On the Keplerian benchmark it needs
-~17 % fewer right-hand-side evaluations than DOP853 at 1e-9 rad, none fewer at 1e-6 rad, and
-more on the torque-free body (``benchmarks/verner98.py``).
+~17 % fewer right-hand-side evaluations than DOP853 at 1e-9 rad, ~9 % fewer at 1e-6 rad, and
+~10 % more on the torque-free body (``benchmarks/verner98.py``).
 
-Breakpoints: steps also land on the knots of the model's tables (a sampled orbit's samples,
-the environment tables)
-(:func:`orbatt.core.model.next_breakpoint`), where the right-hand side's third derivative
-jumps; nothing is recorded there.
+Breakpoints: steps also land on the knots of the model's tables, a sampled orbit's samples and
+the environment tables (:func:`orbatt.core.model.next_breakpoint`), where the right-hand
+side's third derivative jumps; nothing is recorded there.
 
 Output: the integrator lands exactly on every requested output time (the step before it is
 shortened, the step size proposed before shortening is kept for the step after), so outputs
@@ -162,17 +162,21 @@ def plan_step(t, h, max_step, t_next):
 def controller(err, facold, hh):
     """``(fac11, hnew)``: ``err^(1/8)`` and the PI controller's next step after an attempt of
     size ``hh`` with error ``err`` (finite)."""
-    fac11 = math.sqrt(math.sqrt(math.sqrt(err)))  # err ** (1/8)
-    fac = fac11 / facold ** BETA if BETA != 0.0 else fac11
-    fac = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, fac / SAFETY))
-    return fac11, hh / fac
+    return pi_step(math.sqrt(math.sqrt(math.sqrt(err))), facold, hh)  # err ** (1/8)
 
 
 @jit_inline
 def controller9(err, facold, hh):
     """:func:`controller` for a pair whose embedded solution has order 8 (Verner's 9(8)):
     ``(fac11, hnew)`` with ``fac11 = err^(1/9)``."""
-    fac11 = err ** (1.0 / 9.0)
+    return pi_step(err ** (1.0 / 9.0), facold, hh)
+
+
+@jit_inline
+def pi_step(fac11, facold, hh):
+    """``(fac11, hnew)``: the PI controller's next step after an attempt of size ``hh`` whose
+    error to the power 1/(order + 1) is ``fac11`` (``facold``: the previous error, exponent
+    :data:`BETA`), bounded by :data:`FAC_MIN`, :data:`FAC_MAX` and the safety factor."""
     fac = fac11 / facold ** BETA if BETA != 0.0 else fac11
     fac = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, fac / SAFETY))
     return fac11, hh / fac

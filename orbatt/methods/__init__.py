@@ -18,8 +18,8 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
 ``"vern98"`` (:mod:`.dop853`)
     Verner's 9(8) pair (16 stages, no FSAL) in the same compiled loop and options as
     ``"dop853"`` (also wheels and control laws; ensembles member by member, bitwise as alone). On the
-    Keplerian benchmark at 1e-9 rad ~15-20 % less time than ``"dop853"``; no gain at 1e-6 rad,
-    10-50 % slower on the torque-free body (``benchmarks/verner98.py``).
+    Keplerian benchmark at 1e-9 rad ~15-20 % less time than ``"dop853"``, ~10 % at 1e-6 rad;
+    ~10 % slower on the torque-free body (``benchmarks/verner98.py``).
 ``"dop853-lanes"`` (:mod:`.dop853`)
     For ensembles: DOP853 on groups of ``lanes`` members (default 32) that share the step
     size (controlled by the group's largest error) and the orbit evaluation, with the
