@@ -311,9 +311,9 @@ def evaluate_members(potential, body, inertia, t, q, want_tau):
 
     A :class:`Potential` whose ``evaluate`` and ``term_torques`` are :func:`kernel_backed` is
     checked once (``evaluate`` of the first member) and evaluated in one compiled call
-    (:func:`orbatt.core.model.evaluate_members`): 10^4 members of the Keplerian case over 11
-    outputs in 40 ms instead of 154 ms of a call per member (``benchmarks/run.py``'s ensemble
-    end-to-end rows). Any other potential: a call per member."""
+    (:func:`orbatt.core.model.evaluate_members`, the orbit evaluated once for all members): 10^4
+    members of the Keplerian case over 11 outputs in 4 ms instead of 147 ms of a call per member
+    (``benchmarks/run.py``'s ensemble end-to-end rows). Any other potential: a call per member."""
     cls = type(potential)
     if isinstance(potential, Potential) and all(getattr(getattr(cls, name), "kernel_backed", False)
                                                 for name in ("evaluate", "term_torques")):

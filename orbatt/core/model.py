@@ -151,22 +151,17 @@ def orbit_at(s, terms, params, table, work):
 
 @jit
 def next_breakpoint(s, terms, params, table):
-    """The first knot after ``s`` of the model's tables: a sampled orbit's samples (row 0's
-    table, :mod:`orbatt.core.sampled`) and every term row's table (the spline tables of the
-    drag, SRP, magnetic and control terms, :mod:`orbatt.core.environment`), in the step loops'
-    independent variable (:func:`orbit_at`); ``inf`` if none. Both are piecewise polynomials in
-    time whose third derivative jumps at the knots (cubic splines; the orbit's quintic Hermite
-    pieces, C2): the step loops land on them (as on output times), so that no step straddles
-    one and DOP853 keeps its order (a step across a knot has an O(h^4) error the error
-    estimate does not see), at the cost of a step per knot at least.
-
-    Measured: one orbit of slowly turning cubesats under a residual dipole (20 s knots), rtol
-    1e-8: 1e-11 rad instead of up to 1.6e-5 rad (and 6e-8 rad at rtol 1e-12). The shipped
-    ``iss-tle-gravity-gradient`` (TLE orbit, 128 samples per orbit) against a converged run:
-    5.6e-7 rad at rtol 1e-8 and 1.0e-8 at rtol 1e-12 before, ~5e-15 at any rtol now (396
-    steps instead of 45 .. 195); ``sso-j2-rebound`` converged before too (3.7e-13 at rtol
-    1e-12), now in 404 steps instead of 25 .. 125. The facets' shading (drag, SRP) is a kink
-    in the attitude, not in time, and stays."""
+    """The first knot after ``s`` of the model's tables, a sampled orbit's samples (row 0) and
+    every term row's table (drag, SRP, magnetic, control: :mod:`orbatt.core.environment`), in
+    the step loops' independent variable (:func:`orbit_at`); ``inf`` if none. Both are
+    piecewise polynomials in time (cubic splines; the orbit's quintic Hermite pieces, C2) whose
+    third derivative jumps at the knots: the step loops land on them, as on output times, so
+    that no step straddles one (an O(h^4) error the error estimate does not see) and DOP853
+    keeps its order, at the cost of a step per knot at least. Measured (``benchmarks/README.md``,
+    issue 15): a residual dipole over 20 s knots, rtol 1e-8: 1e-11 rad instead of 1.6e-5; the
+    TLE orbit of ``iss-tle-gravity-gradient``: ~5e-15 rad at any rtol instead of 1.0e-8 at
+    rtol 1e-12. The facets' shading (drag, SRP) is a kink in the attitude, not in time, and
+    stays."""
     best = np.inf
     kind0 = terms[0, KIND]
     t = s
@@ -446,28 +441,60 @@ def evaluate_many(t, q, inertia, terms, params, table, work):
 
 @jit
 def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
-    """The members of an ensemble one after the other, each as alone: ``U (E, N)`` as
-    :func:`evaluate_many` and (``want_tau``) the body torques ``tau (E, N, n, 3)``: the ``n``
-    terms of :func:`evaluate_terms` (``per_term``) or the total of :func:`evaluate_many` (``n =
-    1``), at the times ``t (N,)`` and attitudes ``q (E, N, 4)`` of members of principal moments
-    ``inertia (E, 3)``. Each pass of each member starts from fresh scratch (all NaN, as
-    :func:`orbatt.core.potentials.new_work`), so its numbers are those of the one-member
-    kernels called for it alone (one compiled call instead of a Python call per member: a
-    Dataset of 10^4 members)."""
+    """Ensemble members each as alone: ``U (E, N)`` (:func:`evaluate_many`) and (``want_tau``)
+    the torques ``tau (E, N, n, 3)`` of the ``n`` terms (``per_term``, :func:`evaluate_terms`)
+    or their total (``n = 1``), at the times ``t (N,)`` and attitudes ``q (E, N, 4)`` of members
+    of moments ``inertia (E, 3)``. The orbit and the terms' constants are computed once, from
+    fresh scratch over the times in order, as the one-member kernels compute them for each
+    member: each member gets their numbers (summed as :func:`terms_at` sums)."""
     n_members = q.shape[0]
     n = t.shape[0]
+    nt = terms.shape[0] - 1
     U = np.empty((n_members, n))
-    tau = np.empty((n_members, n, terms.shape[0] - 1 if per_term else 1, 3))
+    tau = np.empty((n_members, n, nt if per_term else 1, 3))
+    if nt == 0:  # no term: the one-member kernels' zeros, member by member
+        for e in range(n_members):
+            u, _, total = evaluate_many(t, q[e], inertia[e], terms, params, table, np.full(pot.WORK_SIZE, np.nan))
+            U[e] = u
+            if want_tau and not per_term:
+                tau[e, :, 0] = total
+        return U, tau
+    kinds = np.empty(nt, dtype=np.int64)
+    starts = np.empty(nt, dtype=np.int64)
+    consts = np.empty((n, nt, 4))
+    work = np.full(pot.WORK_SIZE, np.nan)
+    for i in range(n):
+        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
+        for j in range(nt):
+            kind, p0, c = term_constants(j + 1, t[i], terms, params, table, work, r, xhat, v)
+            kinds[j] = kind
+            starts[j] = p0
+            for k in range(4):
+                consts[i, j, k] = c[k]
     for e in range(n_members):
-        work = np.full(pot.WORK_SIZE, np.nan)
-        u, _, total = evaluate_many(t, q[e], inertia[e], terms, params, table, work)
-        U[e] = u
-        if want_tau and per_term:
-            work = np.full(pot.WORK_SIZE, np.nan)
-            _, each = evaluate_terms(t, q[e], inertia[e], terms, params, table, work)
-            tau[e] = each
-        elif want_tau:
-            tau[e, :, 0] = total
+        inertia_t = (inertia[e, 0], inertia[e, 1], inertia[e, 2])
+        for i in range(n):
+            qi = (q[e, i, 0], q[e, i, 1], q[e, i, 2], q[e, i, 3])
+            u_sum = 0.0
+            g_sum = (0.0, 0.0, 0.0, 0.0)
+            for j in range(nt):
+                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3])
+                u, g = term_value(kinds[j], starts[j], c, qi, inertia_t, params)
+                if j == 0:  # as terms_at: the sum starts from the first term's value
+                    u_sum = u
+                    g_sum = g
+                else:
+                    u_sum += u
+                    g_sum = (g_sum[0] + g[0], g_sum[1] + g[1], g_sum[2] + g[2], g_sum[3] + g[3])
+                if want_tau and per_term:
+                    tq = pot.torque_from_gradient(qi, g)
+                    for k in range(3):
+                        tau[e, i, j, k] = tq[k]
+            U[e, i] = u_sum
+            if want_tau and not per_term:
+                tq = pot.torque_from_gradient(qi, g_sum)
+                for k in range(3):
+                    tau[e, i, 0, k] = tq[k]
     return U, tau
 
 
