@@ -24,7 +24,9 @@ def kernel_backed(method):
     """Mark a :class:`Potential` method that computes from :meth:`Potential.kernel_model` alone
     (as the compiled kernels do, after checks that depend on the body and the times only):
     :func:`evaluate_members` then evaluates an ensemble in one compiled call. A subclass that
-    overrides ``evaluate`` or ``term_torques`` without this mark gets a call per member."""
+    overrides ``evaluate`` or ``term_torques`` without this mark gets a call per member; a marked
+    ``term_torques`` other than the base one gives each kernel term's torque, as
+    :func:`orbatt.core.model.evaluate_terms`."""
     method.kernel_backed = True
     return method
 
@@ -83,9 +85,6 @@ class Potential:
     #: ``None`` (defined at all times) or ``(t_first, t_last)``: the times the potential can
     #: be evaluated at (in the body's time unit); :func:`orbatt.propagate` refuses to leave it
     time_span = None
-    #: ``term_torques`` gives each kernel term's torque (``orbatt.core.model.evaluate_terms``);
-    #: False: the one total torque of ``evaluate``
-    torques_per_term = False
 
     def check_body(self, body: RigidBody):
         """Raise :class:`InputError` if this potential cannot act on ``body``."""
@@ -289,12 +288,18 @@ def member_body(body, inertia):
     return RigidBody(inertia.tolist() if body.dimensionless else inertia * body.inertia_unit)
 
 
+def _total_torque_only(potential):
+    """Whether ``potential``'s terms are its one total torque (the base ``term_torques``); else
+    each term has its own (a kernel-backed ``term_torques``: ``orbatt.core.model.evaluate_terms``)."""
+    return getattr(type(potential), "term_torques", None) is Potential.term_torques
+
+
 def energy_and_torques(potential, body, t, q, want_tau):
     """``(U (N,), tau)``: the potential energy at the times ``t (N,)`` and attitudes ``q (N,
     4)`` and, if ``want_tau``, each torque term (``(N, terms, 3)``,
     :meth:`Potential.term_torques`), else None (the body's energy unit). A potential whose
     terms are its own torque (the base ``term_torques``) is evaluated once."""
-    if want_tau and getattr(type(potential), "term_torques", None) is Potential.term_torques:
+    if want_tau and _total_torque_only(potential):
         U, _, torque = potential.evaluate(body, t, q)
         tau = np.asarray(torque, dtype=np.float64)[:, None, :]
     else:
@@ -321,7 +326,7 @@ def evaluate_members(potential, body, inertia, t, q, want_tau):
         q = np.ascontiguousarray(q, dtype=np.float64)
         potential.evaluate(body, t, q[0])  # what evaluate checks (the body, the times), once
         U, tau = km.evaluate_members(t, q, np.ascontiguousarray(inertia, dtype=np.float64),
-                                     *potential.kernel_model(), potential.torques_per_term, want_tau)
+                                     *potential.kernel_model(), not _total_torque_only(potential), want_tau)
         return U, (tau if want_tau else None)
     members = [energy_and_torques(potential, member_body(body, inertia[e]), t, q[e], want_tau)
                for e in range(q.shape[0])]

@@ -140,7 +140,6 @@ class EnvironmentTorques(Potential):
     """
 
     name = "environment"
-    torques_per_term = True  # term_torques: each term (orbatt.core.model.evaluate_terms)
     dimensionless = False
 
     def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
