@@ -1,5 +1,5 @@
 """Environment torques on a body of flat plates along a prescribed orbit, with units at the
-boundary (``DESIGN.md`` §10): aerodynamic drag, solar radiation pressure and a residual
+boundary (``docs/design.md`` §10): aerodynamic drag, solar radiation pressure and a residual
 magnetic dipole, with or without the gravity gradient.
 
 The orbit is prescribed, so every field that depends on position and time alone - the

@@ -1,4 +1,4 @@
-"""Orbits from a TLE (DESIGN.md §11): SGP4 + astropy TEME -> GCRS, sampled and interpolated;
+"""Orbits from a TLE (docs/design.md §11): SGP4 + astropy TEME -> GCRS, sampled and interpolated;
 checked against sgp4 and astropy called directly, the orbital frame of the SGP4 state, the
 gravity-gradient kernel, and bad TLEs refused naming ``tle``."""
 import subprocess

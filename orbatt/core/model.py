@@ -1,4 +1,4 @@
-"""The term list: what acts on the body, evaluated in one loop (``DESIGN.md`` §10).
+"""The term list: what acts on the body, evaluated in one loop (``docs/design.md`` §10).
 
 The right-hand side of eq. (7) is the kinetic part plus the sum of the terms acting on the
 body. This module is the **only** place that dispatches on term kinds; the step loops of
@@ -57,7 +57,7 @@ those of the other terms.
 
 Every term contributes ``(U, G)``: its potential and its generalized gradient, so that the
 momentum equation reads ``dQ/dt = 1/4 Q a - sum G`` (:mod:`orbatt.core.hamiltonian`).
-Conservative terms give the tangential gradient of their potential (``DESIGN.md`` §2). The
+Conservative terms give the tangential gradient of their potential (``docs/design.md`` §2). The
 sum starts from the first term's value (not from zero), so a model of one term gives exactly
 the numbers of that term alone.
 

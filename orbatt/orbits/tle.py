@@ -1,4 +1,4 @@
-"""Orbits from a two-line element set (``DESIGN.md`` §11): SGP4 (the ``sgp4`` package) gives
+"""Orbits from a two-line element set (``docs/design.md`` §11): SGP4 (the ``sgp4`` package) gives
 the TEME state, astropy rotates it to GCRS (orbatt's inertial frame ``S`` when there is an
 epoch), and the orbit is sampled once and interpolated like a REBOUND orbit
 (:class:`~orbatt.orbits.sampled.SampledOrbit`)."""

@@ -1,4 +1,4 @@
-"""The scenario tables of the environment torques (issue 11, ``DESIGN.md`` §10):
+"""The scenario tables of the environment torques (issue 11, ``docs/design.md`` §10):
 ``[[body.facets]]``, ``[torques]`` and ``[environment]``.
 
 ```toml
