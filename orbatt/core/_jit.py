@@ -9,8 +9,10 @@ which the step loops catch and reject, instead of raising).
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import warnings
+from pathlib import Path
 
 import numba as nb
 import numpy as np
@@ -41,6 +43,12 @@ class _CheckedCache(FunctionCache):
     results. Used only where :data:`FAST_LOADS` holds.
     """
 
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        cache_file = getattr(self, "_cache_file", None)
+        if cache_file is not None and hasattr(cache_file, "_source_stamp"):
+            cache_file._source_stamp = (cache_file._source_stamp, core_stamp())
+
     def load_overload(self, sig, target_context):
         try:
             if not FAST_LOADS:
@@ -70,6 +78,29 @@ class _CheckedCache(FunctionCache):
 
 #: the unreadable cache entries this process removed
 _DISCARDED: list = []
+
+
+def core_stamp() -> str:
+    """A digest of every source file of :mod:`orbatt.core` (name, modification time, size),
+    folded into each kernel's cache stamp by :class:`_CheckedCache`.
+
+    numba keys a kernel's cache entry on its own file's stamp only, but the kernels inline
+    helpers from other files (the step loops of ``dop853.py`` inline ``model.term_value``): a
+    change to ``model.py`` alone left the loops' cached machine code in place, running the old
+    right-hand side (seen: a new term kind integrated with the old dispatch, wrong results and
+    ~10^7 tiny steps, until the cache was deleted). With the digest, a change to any file of
+    the package's kernels recompiles them all."""
+    global _CORE_STAMP
+    if _CORE_STAMP is None:
+        h = hashlib.sha1()
+        for f in sorted(Path(__file__).resolve().parent.glob("*.py")):
+            st = f.stat()
+            h.update(f"{f.name}:{st.st_mtime_ns}:{st.st_size};".encode())
+        _CORE_STAMP = h.hexdigest()
+    return _CORE_STAMP
+
+
+_CORE_STAMP = None
 
 
 class CacheWarning(RuntimeWarning):

@@ -133,9 +133,12 @@ def build_environment_torques(spec, orbit, t_end):
     control = None if spec.control is None else spec.control["control"]
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    return EnvironmentTorques(orbit, t_end * u.s, facets=tq["facets"], gravity_gradient=True, drag=tq["drag"],
-                              srp=tq["srp"], residual_dipole=dipole, atmosphere=atmosphere, magnetic_field=field,
-                              shadow=env["shadow"], corotation=env["corotation"], control=control)
+    constant = None if tq.get("constant") is None else tq["constant"] * u.N * u.m
+    gg = spec.potential_kind == "gravity-gradient"
+    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=tq["facets"],
+                              gravity_gradient=gg, drag=tq["drag"], srp=tq["srp"], residual_dipole=dipole,
+                              atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
+                              corotation=env["corotation"], control=control, constant_torque=constant)
 
 
 def build_control(spec, orbit, t_end):

@@ -157,6 +157,9 @@ drag             true | false                      false  aerodynamic drag of th
 srp              true | false                      false  solar radiation pressure on the facets (needs facets and
                                                           [orbit] epoch)
 residual_dipole  magnetic moment (A m2), 3 values  none   the body's dipole m: torque m x B (body axes)
+constant         torque (N m), 3 values            none   a constant body torque (body axes: thruster
+                                                          misalignment, outgassing); needs no orbit (also with
+                                                          kind = 'torque-free')
 
 [environment]
 atmosphere      'exponential' | 'nrlmsis' | 'none'  'exponential' with drag        density model (NRLMSIS 2.1 through
