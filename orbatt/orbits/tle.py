@@ -16,7 +16,7 @@ from ..errors import InputError
 from .base import GM_EARTH
 from .sampled import SampledOrbit
 
-__all__ = ["TleOrbit", "parse_tle", "read_tle_file", "tle_checksum"]
+__all__ = ["TleOrbit", "parse_tle", "read_tle_file", "tle_checksum", "tle_epoch"]
 
 #: half-width (s) of the central difference of the SGP4 velocity that gives the accelerations
 ACCEL_DELTA = 1.0
@@ -70,6 +70,15 @@ def parse_tle(lines, name="tle"):
     return title, lines[0], lines[1]
 
 
+def tle_epoch(line1, line2, name="tle"):
+    """The epoch of a TLE (its line 1, columns 19-32) as an astropy ``Time`` in UTC, as SGP4
+    reads it (the instant its ``tsince = 0``)."""
+    from astropy.time import Time
+
+    sat = _satrec(line1, line2, name)
+    return Time(sat.jdsatepoch, sat.jdsatepochF, format="jd", scale="utc")
+
+
 def read_tle_file(path, name="tle_file"):
     """The lines of a TLE file (2 lines, or a name line and 2 lines); see :func:`parse_tle`."""
     try:
@@ -97,6 +106,11 @@ class TleOrbit(SampledOrbit):
         The two lines (optionally a name line first), or their text.
     t_end : Quantity (time) or str
         End of the sampled span after ``epoch`` (``> 0``).
+    t_start : Quantity (time) or str
+        Start of the sampled span (default 0; negative: before ``epoch``, which SGP4
+        propagates as well as after). The environment tables of
+        :class:`~orbatt.torques.EnvironmentTorques` sample a margin either side of a run
+        (:func:`orbatt.torques.sample_margin`); a scenario samples its TLE over it.
     epoch : astropy.time.Time or str, optional
         The instant ``t = 0`` (UTC unless a ``Time`` says otherwise). Default: the TLE's epoch.
         A later epoch starts the run later (SGP4 accuracy degrades by ~1 to 3 km per day from
@@ -131,19 +145,17 @@ class TleOrbit(SampledOrbit):
     InputError
         A malformed TLE (line count or length, line numbers, checksum, catalogue numbers),
         elements SGP4 refuses, or an SGP4 error along the span (e.g. a decayed orbit), each
-        naming ``tle``; a non-positive ``t_end``.
+        naming ``tle``; a non-positive ``t_end``, a positive ``t_start``.
     """
 
     name = "tle"
     span_hint = "build it with a larger t_end"
 
-    def __init__(self, tle, t_end, *, epoch=None, samples_per_orbit=128):
-        from astropy.time import Time
-
+    def __init__(self, tle, t_end, *, epoch=None, samples_per_orbit=128, t_start=0.0 * u.s):
         self.title, self.line1, self.line2 = parse_tle(tle)
         self._sat = _satrec(self.line1, self.line2, "tle")
         sat = self._sat
-        self.tle_epoch = Time(sat.jdsatepoch, sat.jdsatepochF, format="jd", scale="utc")
+        self.tle_epoch = tle_epoch(self.line1, self.line2)
         self.epoch = self.tle_epoch if epoch is None else parse_epoch(epoch)
         self.gm = GM_EARTH
         self.central_body = "earth"
@@ -153,6 +165,10 @@ class TleOrbit(SampledOrbit):
         if te.shape != () or not te > 0:
             raise InputError(f"t_end: {t_end!r} must be one positive time, e.g. '1 d'")
         self.t_end = float(te)
+        ts = U.strip(t_start, U.TIME, "t_start")
+        if ts.shape != () or not (ts <= 0 and np.isfinite(ts)):
+            raise InputError(f"t_start: {t_start!r} must be one time <= 0 (s before the epoch), e.g. '-1 h'")
+        self.t_start = float(ts)
         n = int(samples_per_orbit) if np.ndim(samples_per_orbit) == 0 else -1
         if n != samples_per_orbit or n < 8:
             raise InputError(f"samples_per_orbit: {samples_per_orbit!r} must be an integer >= 8 (default 128)")
@@ -172,8 +188,9 @@ class TleOrbit(SampledOrbit):
         return cls(list(read_tle_file(path)), t_end, **options)
 
     def _sample_times(self):
-        """Sample times ``0 .. t_end`` (s), equal steps ``2 pi / N`` in the mean elements'
-        eccentric anomaly, the last two intervals evened out (no sliver at the end)."""
+        """Sample times ``t_start .. t_end`` (s), equal steps ``2 pi / N`` in the mean elements'
+        eccentric anomaly from ``t = 0`` (a sample), the two intervals at each end evened out
+        (no sliver)."""
         sat, nm = self._sat, self.n_mean
         e = float(sat.ecco)
 
@@ -184,14 +201,21 @@ class TleOrbit(SampledOrbit):
                 E = E - (E - e * math.sin(E) - M) / (1.0 - e * math.cos(E))
             return E
 
-        E0, E1 = ecc_anomaly(self.offset), ecc_anomaly(self.offset + self.t_end)
         dE = 2.0 * math.pi / self.samples_per_orbit
-        E = E0 + dE * np.arange(1, int(math.floor((E1 - E0) / dE)) + 1)
-        t = (E - e * np.sin(E) - sat.mo) / nm - self.offset
-        t = t[(t > 0.0) & (t < self.t_end)]
-        if t.size and self.t_end - t[-1] < 0.5 * (t[-1] - (t[-2] if t.size > 1 else 0.0)):
-            t = t[:-1]  # the last interval would be a sliver: stretch the one before
-        return np.concatenate([[0.0], t, [self.t_end]])
+        E0 = ecc_anomaly(self.offset)
+
+        def inner(t_edge):  # the samples strictly between 0 and t_edge, from 0 outwards
+            k = int(math.floor(abs(ecc_anomaly(self.offset + t_edge) - E0) / dE))
+            E = E0 + math.copysign(dE, t_edge) * np.arange(1, k + 1)
+            t = (E - e * np.sin(E) - sat.mo) / nm - self.offset
+            t = t[(t > min(0.0, t_edge)) & (t < max(0.0, t_edge))]
+            if t.size and abs(t_edge - t[-1]) < 0.5 * abs(t[-1] - (t[-2] if t.size > 1 else 0.0)):
+                t = t[:-1]  # the last interval would be a sliver: stretch the one before
+            return t
+
+        before = inner(self.t_start)[::-1] if self.t_start < 0.0 else np.empty(0)
+        start = [self.t_start] if self.t_start < 0.0 else []
+        return np.concatenate([start, before, [0.0], inner(self.t_end), [self.t_end]])
 
     def sgp4_gcrs(self, t):
         """SGP4 position (km) and velocity (km/s) in GCRS at ``t`` (s since the epoch, 1-D):
@@ -222,12 +246,12 @@ class TleOrbit(SampledOrbit):
 
     def describe(self):
         """Plain description: ``type = "tle"``, the two lines and the name, ``tle_epoch``,
-        ``epoch``, ``period_s``, ``t_end_s``, ``samples_per_orbit``, ``n_samples``, the
+        ``epoch``, ``period_s``, ``t_start_s``, ``t_end_s``, ``samples_per_orbit``, ``n_samples``, the
         ``frame`` (GCRS) and the sgp4 version."""
         import sgp4
 
         return {"type": "tle", "name": self.title, "line1": self.line1, "line2": self.line2,
                 "tle_epoch": epoch_string(self.tle_epoch), "epoch": epoch_string(self.epoch),
-                "period_s": self.period_value, "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
+                "period_s": self.period_value, "t_start_s": self.t_start, "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
                 "n_samples": int(self._table.shape[0]), "frame": "GCRS", "central_body": "earth",
                 "sgp4_version": sgp4.__version__}

@@ -461,8 +461,8 @@ def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
 def _parse_tle_orbit(ctx, o, source):
     """``[orbit] provider = "tle"``: the two lines (``tle``) or a file (``tle_file``, relative
     to the scenario file), checked here (:func:`orbatt.orbits.tle.parse_tle`); an optional
-    ``epoch`` (default: the TLE's)."""
-    from ..orbits.tle import parse_tle, read_tle_file
+    ``epoch`` (default: the TLE's, which ``epoch`` holds then)."""
+    from ..orbits.tle import parse_tle, read_tle_file, tle_epoch
 
     extra = sorted(set(o) - TLE_KEYS)
     if extra:
@@ -482,7 +482,9 @@ def _parse_tle_orbit(ctx, o, source):
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
     out = {"provider": "tle", "tle": lines, "central_body": "earth", "gm": None}
-    out["epoch"] = None
+    # the TLE's own epoch unless [orbit] epoch moves t = 0: what the environment and the
+    # control laws read (NRLMSIS, IGRF, the Sun), like a Keplerian orbit's epoch
+    out["epoch"] = tle_epoch(lines[-2], lines[-1])
     if "epoch" in o:
         try:
             out["epoch"] = parse_epoch(str(o["epoch"]))
