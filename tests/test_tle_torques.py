@@ -198,15 +198,16 @@ def test_bdot_on_a_tle_detumbles_with_m_cross_b(tmp_path):
     m = ds["dipole_control"].values
     assert np.abs(m).max() <= 0.2 * (1 + 1e-12)
     ref = np.cross(m, B)
-    assert np.abs(ds["torque_control"].values - ref).max() < 1e-6 * np.abs(ref).max()
+    assert np.abs(ds["torque_control"].values - ref).max() < 1e-9 * np.abs(ref).max()   # measured 2.9e-12
     # m = -gain dB_B/dt, clipped per axis: dB_B/dt = R^T dB/dt - omega x B_B, dB/dt by a
-    # central difference of IGRF along the orbit
+    # central difference of IGRF along the orbit (the kernel differentiates its 20 s spline
+    # table): measured 2.4e-8 A m^2 (unsaturated here: -gain dB_B/dt < 0.13 A m^2)
     h = 1.0
     Bdot = (IGRFField().field(sc.orbit.epoch + (t + h) * u.s, sc.orbit.state(t + h)[0])
             - IGRFField().field(sc.orbit.epoch + (t - h) * u.s, sc.orbit.state(t - h)[0])) / (2 * h)
     dBb = _body_vectors(q, Bdot) - np.cross(ds["omega"].values, B)
     law = np.clip(-4e4 * dBb, -0.2, 0.2)
-    assert np.abs(m - law).max() < 1e-3 * 0.2
+    assert np.abs(m - law).max() < 1e-6 * 0.2
     rate = np.degrees(np.linalg.norm(ds["omega"].values, axis=1))
-    assert rate[0] > 5.0 and rate[-1] < 1.0                            # detumbled in half an orbit
+    assert rate[0] > 5.0 and rate[-1] < 0.5                            # 5.8 -> 0.39 deg/s in half an orbit
     assert isinstance(sc.potential.control, BDotControl)

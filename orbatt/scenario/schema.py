@@ -129,7 +129,7 @@ law          'pd' | 'bdot'                   required               quaternion P
                                                                     magnetorquers
 target       'orbital' | 'inertial' | 'sun'  'orbital'              pd: hold the orbital frame (q_orbital -> 1), the
                                                                     attitude target_q, or point target_axis at the
-                                                                    Sun (needs [orbit] epoch)
+                                                                    Sun (needs an epoch: [orbit] epoch or a TLE's)
 target_q     plain, 4 values                 required for inertial  pd: target attitude [w, x, y, z], body ->
                                                                     inertial; with target = 'orbital' (optional) the
                                                                     held attitude relative to the orbital frame
@@ -155,7 +155,7 @@ diffuse           plain in [0, 1]   0         diffuse reflectivity (SRP)
 [torques]
 drag             true | false                      false  aerodynamic drag of the facets (needs [[body.facets]])
 srp              true | false                      false  solar radiation pressure on the facets (needs facets and
-                                                          [orbit] epoch)
+                                                          an epoch: [orbit] epoch or a TLE's)
 residual_dipole  magnetic moment (A m2), 3 values  none   the body's dipole m: torque m x B (body axes)
 constant         torque (N m), 3 values            none   a constant body torque (body axes: thruster
                                                           misalignment, outgassing); needs no orbit (also with
@@ -212,7 +212,8 @@ raan           angle                          required (not tle)    right ascens
 argp           angle                          required (not tle)    argument of periapsis
 true_anomaly   angle                          one of the two        true anomaly at t = 0
 mean_anomaly   angle                          one of the two        mean anomaly at t = 0
-epoch          ISO time (UTC)                 none; tle: the TLE's  the instant t = 0 (CF time axis, third bodies)
+epoch          ISO time (UTC)                 none; tle: the TLE's  the instant t = 0 (CF time axis, third bodies; the
+                                                                    date of the Sun, NRLMSIS and the magnetic field)
 perturbations  list of 'j2' | 'moon' | 'sun'  []                    rebound: forces besides the central point mass
 integrator     'ias15' | 'whfast'             'ias15'               rebound: the REBOUND integrator
 tle            2 text lines                   one of tle, tle_file  tle: the two-line element set
