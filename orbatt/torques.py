@@ -142,8 +142,10 @@ class EnvironmentTorques(Potential):
         The orbit (GCRS when it has an epoch). SRP, IGRF and NRLMSIS need ``orbit.epoch``.
         None: no term reads an orbit (a torque-free body with a ``constant_torque``).
     t_end : Quantity (time) or None
-        The end of the runs (the environment is sampled over ``[t_start, t_end]``); None
-        without an orbit (nothing is sampled: the terms are defined at all times).
+        The end of the runs (the environment is sampled over ``[t_start, t_end]`` and a
+        margin either side, :func:`sample_margin`, cut to a sampled orbit's span, which must
+        hold ``[t_start, t_end]``); None without an orbit (nothing is sampled: the terms are
+        defined at all times).
     facets : sequence of Facet
         The plates of the body (drag and SRP need at least one).
     gravity_gradient : bool
