@@ -63,9 +63,9 @@ def sample_margin(*, drag=False, srp=False, magnetic=False, sun=False):
     -------
     float
         The margin (s), 0 without tables. An orbit sampled over ``[t_start - margin, t_end +
-        margin]`` (a TLE's, which SGP4 propagates either side of its epoch) keeps the run
-        inside the tables' end intervals; a shorter one cuts the margin (still within the
-        tables' stated errors).
+        margin]`` (a TLE's, which SGP4 propagates either side of its epoch) keeps the
+        tables' end intervals outside the run; a shorter one cuts the margin (still within
+        the tables' stated errors).
     """
     steps = [step for on, step in ((drag, DENSITY_STEP), (srp or sun, SUN_STEP), (magnetic, MAGNETIC_FIELD_STEP))
              if on]
@@ -249,11 +249,11 @@ class EnvironmentTorques(Potential):
     # --- the kernel model
     def _samples(self, step):
         """Samples every ``step`` (s) over the run and a margin of one step on each side, so
-        that the run lies inside the spline's end intervals; the margin is cut to the span of
-        a sampled orbit (:func:`sample_margin` says how far to sample one, e.g. a TLE, to
-        keep it whole). A cut margin leaves the run in the end intervals, whose error the
-        steps' stated errors already cover (:mod:`orbatt.environment.tables` measures them on
-        tables without a margin); at least 3 intervals."""
+        that the spline's end intervals (not-a-knot) lie outside the run; the margin is cut
+        to the span of a sampled orbit (:func:`sample_margin` says how far to sample one, e.g.
+        a TLE, to keep it whole). A cut margin puts the end intervals inside the run, whose
+        error the steps' stated errors already cover (:mod:`orbatt.environment.tables`
+        measures them on tables without a margin); at least 3 intervals."""
         t0, t1 = self.span
         valid = self.orbit.time_span
         lo, hi = t0 - step, t1 + step

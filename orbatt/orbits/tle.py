@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
 import warnings
 
 import numpy as np
@@ -136,8 +137,6 @@ _FIELDS = (
 def _check_fields(line1, line2, name):
     """Refuse a TLE whose epoch or elements are malformed or out of range, naming the field,
     its columns and value (SGP4 reads several of them silently)."""
-    import re
-
     for k, c0, c1, what, pattern, lo, hi, unit in _FIELDS:
         text = (line1, line2)[k - 1][c0 - 1:c1]
         where = f"{name}: line {k} columns {c0}-{c1} ({what}) {text!r}"
@@ -387,12 +386,13 @@ class TleOrbit(SampledOrbit):
 
     def describe(self):
         """Plain description: ``type = "tle"``, the two lines and the name, ``tle_epoch``,
-        ``epoch``, ``period_s``, ``t_start_s``, ``t_end_s``, ``samples_per_orbit``, ``n_samples``, the
-        ``frame`` (GCRS) and the sgp4 version."""
+        ``epoch``, ``period_s``, ``t_start_s``, ``t_end_s``, ``samples_per_orbit``,
+        ``n_samples``, the ``frame`` (GCRS) and the sgp4 version."""
         import sgp4
 
         return {"type": "tle", "name": self.title, "line1": self.line1, "line2": self.line2,
                 "tle_epoch": epoch_string(self.tle_epoch), "epoch": epoch_string(self.epoch),
-                "period_s": self.period_value, "t_start_s": self.t_start, "t_end_s": self.t_end, "samples_per_orbit": self.samples_per_orbit,
+                "period_s": self.period_value, "t_start_s": self.t_start, "t_end_s": self.t_end,
+                "samples_per_orbit": self.samples_per_orbit,
                 "n_samples": int(self._table.shape[0]), "frame": "GCRS", "central_body": "earth",
                 "sgp4_version": sgp4.__version__}
