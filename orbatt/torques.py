@@ -31,7 +31,7 @@ from .errors import InputError
 from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
 
-__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES"]
+__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "sample_margin"]
 
 #: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
 TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
@@ -45,6 +45,31 @@ def _quantity(value, unit, name):
     if isinstance(value, (list, tuple)) and any(isinstance(v, (str, u.Quantity)) for v in value):
         return np.array([U.strip(v, unit, f"{name}[{k}]") for k, v in enumerate(value)], dtype=np.float64)
     return U.strip(value, unit, name)
+
+
+def sample_margin(*, drag=False, srp=False, magnetic=False, sun=False):
+    """How far (s) before the start and after the end of a run :class:`EnvironmentTorques`
+    samples the orbit: one step of the coarsest table it builds.
+
+    Parameters
+    ----------
+    drag, srp, magnetic, sun : bool
+        The tables built: density (drag, :data:`~orbatt.environment.tables.DENSITY_STEP`),
+        Sun position (SRP or a PD law pointing at the Sun,
+        :data:`~orbatt.environment.tables.SUN_STEP`), magnetic field (a residual dipole or
+        B-dot, :data:`~orbatt.environment.tables.MAGNETIC_FIELD_STEP`).
+
+    Returns
+    -------
+    float
+        The margin (s), 0 without tables. An orbit sampled over ``[t_start - margin, t_end +
+        margin]`` (a TLE's, which SGP4 propagates either side of its epoch) keeps the
+        tables' end intervals outside the run; a shorter one cuts the margin (still within
+        the tables' stated errors).
+    """
+    steps = [step for on, step in ((drag, DENSITY_STEP), (srp or sun, SUN_STEP), (magnetic, MAGNETIC_FIELD_STEP))
+             if on]
+    return max(steps, default=0.0)
 
 
 class Facet:
@@ -117,8 +142,10 @@ class EnvironmentTorques(Potential):
         The orbit (GCRS when it has an epoch). SRP, IGRF and NRLMSIS need ``orbit.epoch``.
         None: no term reads an orbit (a torque-free body with a ``constant_torque``).
     t_end : Quantity (time) or None
-        The end of the runs (the environment is sampled over ``[t_start, t_end]``); None
-        without an orbit (nothing is sampled: the terms are defined at all times).
+        The end of the runs (the environment is sampled over ``[t_start, t_end]`` and a
+        margin either side, :func:`sample_margin`, cut to a sampled orbit's span, which must
+        hold ``[t_start, t_end]``); None without an orbit (nothing is sampled: the terms are
+        defined at all times).
     facets : sequence of Facet
         The plates of the body (drag and SRP need at least one).
     gravity_gradient : bool
@@ -206,6 +233,12 @@ class EnvironmentTorques(Potential):
             raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
         self.control = control
         self._control_rows = {}
+        valid = None if orbit is None else orbit.time_span
+        if valid is not None and (t0 < valid[0] or t1 > valid[1]):
+            key, value = ("t_start", t0) if t0 < valid[0] else ("t_end", t1)
+            hint = getattr(orbit, "span_hint", "build the orbit over a longer span")
+            raise InputError(f"{key}: {value!r} s is outside the span [{valid[0]!r}, {valid[1]!r}] s the orbit "
+                             f"was sampled over; {hint}")
         self.span = None if orbit is None else (t0, t1)
         if orbit is None:
             self.kind, self.params, self.table = kp.TORQUE_FREE, np.zeros(1), kp.EMPTY_TABLE
@@ -215,9 +248,19 @@ class EnvironmentTorques(Potential):
 
     # --- the kernel model
     def _samples(self, step):
+        """Samples every ``step`` (s) over the run and a margin of one step on each side, so
+        that the spline's end intervals (not-a-knot) lie outside the run; the margin is cut
+        to the span of a sampled orbit (:func:`sample_margin` says how far to sample one, e.g.
+        a TLE, to keep it whole). A cut margin puts the end intervals inside the run, whose
+        error the steps' stated errors already cover (:mod:`orbatt.environment.tables`
+        measures them on tables without a margin); at least 3 intervals."""
         t0, t1 = self.span
-        # a margin of one step on each side, so that the spline covers the whole run
-        return sample_along_orbit(self.orbit, (t0 - step) * u.s, (t1 + step) * u.s, step * u.s)
+        valid = self.orbit.time_span
+        lo, hi = t0 - step, t1 + step
+        if valid is not None:
+            lo, hi = max(lo, valid[0]), min(hi, valid[1])
+        step = min(step, (hi - lo) / 3.0)
+        return sample_along_orbit(self.orbit, lo * u.s, hi * u.s, step * u.s)
 
     def build_model(self):
         """The compiled model ``(terms, params, table)`` (:mod:`orbatt.core.model`): the orbit,
