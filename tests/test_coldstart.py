@@ -141,13 +141,16 @@ def test_kernel_key_follows_the_model_not_the_numbers(tmp_path, shipped_outputs)
 
 
 def test_warm_up_writes_the_stamp_and_the_run_switches(tmp_path):
+    from orbatt.progress import ProgressInfo
+
     cold = coldstart.ColdStart("paper-torque-free", None, coldstart.kernel_key("paper-torque-free"), tmp_path)
     seen = []
     report = cold.progress(seen.append)
-    assert report("info") is None and seen == ["info"] and not cold.is_warm()
+    info = ProgressInfo(0.5, 1.0, 2.0, 10, 0.1)
+    assert report(info) is None and seen == [info] and not cold.is_warm()
     assert coldstart.warm_up("paper-torque-free", "", cold.stamp) == 0
     assert cold.is_warm() and json.loads(cold.stamp.read_text()) == coldstart.fingerprint()
-    assert report("info") is False and cold.switched and seen == ["info"]
+    assert report(info) is False and cold.switched and seen == [info] and cold.projected is None
 
 
 def test_rerun_compiled_runs_the_same_command(tmp_path, shipped_outputs):
