@@ -66,7 +66,8 @@ VALLADO_TABLE = np.array([[float(x) for x in row.split()] for row in """
 def _positive(value, unit, name, example, allow_plain=False):
     out = U.strip(value, unit, name, allow_plain=allow_plain)
     if out.shape != () or not out > 0.0:
-        raise InputError(f"{name}: {value!r} must be one positive {unit.physical_type}, e.g. '{example}'")
+        kind = U.dimension_phrase(unit).split(" ", 1)[1]
+        raise InputError(f"{name}: {value!r} must be one positive {kind}, e.g. '{example}'")
     return float(out)
 
 

@@ -23,6 +23,7 @@ import contextlib
 import numpy as np
 from astropy import units as u
 
+from .. import units as U
 from ..errors import InputError
 
 __all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "gcrs_to_itrs",
@@ -83,7 +84,7 @@ def as_vectors(v, name, unit=None):
         try:
             v = v.to_value(unit)
         except u.UnitConversionError:
-            raise InputError(f"{name}: {v.unit} is not a {unit.physical_type}; give e.g. '7000 {unit}'") from None
+            raise InputError(f"{name}: {v.unit} is not {U.dimension_phrase(unit)}; give e.g. '7000 {unit}'") from None
     arr = np.asarray(v, dtype=np.float64)
     if arr.ndim == 1:
         arr = arr[None, :]
