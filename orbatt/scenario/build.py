@@ -8,6 +8,7 @@ Every builder takes a :class:`~orbatt.scenario.fields.FieldContext` and reports 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from astropy import units as u
@@ -27,7 +28,7 @@ from ..orbital import state_from_orbital
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
            "build_potential",
            "build_environment_torques", "build_control", "build_initial_state",
-           "build_output_times", "check_work", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
+           "build_output_times", "check_work", "check_field_span", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
 #: time (2e7 outputs: 7.2 GB, and the run needs working copies of it)
@@ -107,6 +108,31 @@ def environment_margin(spec):
                          magnetic=(tq is not None and tq["residual_dipole"] is not None)
                          or (c is not None and c["magnetic_field"] is not None),
                          sun=getattr(law, "target", None) == "sun")
+
+
+def check_field_span(ctx, spec, t_end):
+    """Refuse, naming ``[integration] t_end``, a run whose IGRF field (``magnetic_field =
+    "igrf"`` of ``[torques]`` or of a B-dot ``[control]``) would be sampled past IGRF-14's span
+    (:data:`orbatt.environment.magnetic.IGRF_SPAN`): the epoch is checked when the file is read,
+    the end of the run (with the tables' margin, :func:`environment_margin`) here, before
+    anything is sampled."""
+    fields = [] if spec.torques is None else [spec.torques["environment"]["magnetic_field"]]
+    fields += [] if spec.control is None else [spec.control["magnetic_field"]]
+    epoch = None if spec.orbit is None else spec.orbit.get("epoch")
+    if "igrf" not in fields or epoch is None:
+        return
+    from astropy.time import TimeDelta
+
+    from ..environment.magnetic import check_igrf_instants
+
+    margin = environment_margin(spec)
+    try:
+        with warnings.catch_warnings():  # ERFA's "dubious year" past the leap-second table
+            warnings.simplefilter("ignore")
+            check_igrf_instants(epoch + TimeDelta([-margin, t_end + margin], format="sec"), "[integration] t_end")
+    except InputError as exc:
+        raise ctx.error("[integration] t_end", f"{t_end:.6g} s from the epoch: the IGRF field would be sampled "
+                                               f"over {str(exc).split(': ', 1)[-1]}; shorten the run") from None
 
 
 def build_output_times(ctx, integration, period):

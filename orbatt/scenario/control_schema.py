@@ -35,6 +35,7 @@ from ..errors import InputError
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
 from .ranges import RANGES
+from .torques_schema import check_field_epoch
 
 __all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "LAWS", "parse_control"]
 
@@ -146,6 +147,7 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
         field = parse_choice(ctx, "[environment] magnetic_field", field, ("igrf", "dipole"))
         if epoch is None:
             raise ctx.error("[orbit] epoch", f"missing; the {field} field of B-dot needs the date (give [orbit] epoch)")
+        check_field_epoch(ctx, field, epoch)
         out["control"] = BDotControl(gain * u.A * u.m**2 * u.s / u.T, mmax * u.A * u.m**2)
         out["magnetic_field"] = field
         return out

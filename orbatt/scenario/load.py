@@ -15,7 +15,7 @@ from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
-                    build_rebound_orbit, build_tle_orbit, check_work, environment_margin, tle_period)
+                    build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
 from ..dataset.build import dataset_content
@@ -70,6 +70,7 @@ class Scenario:
             period = kepler.period_value
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
         check_work(ctx, self.t_end, period)  # the orbit alone, before REBOUND samples it
+        check_field_span(ctx, spec, float(self.times[-1]))
         if provider == "tle":
             self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]), environment_margin(spec))
         elif spec.orbit is not None:

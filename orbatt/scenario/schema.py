@@ -426,8 +426,8 @@ def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
     if "epoch" in o:
         try:  # the orbit providers' own parser: a string astropy parses, taken as UTC
             out["epoch"] = parse_epoch(str(o["epoch"]))
-        except InputError:
-            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
+        except InputError as exc:
+            raise ctx.error("[orbit] epoch", str(exc).split(": ", 1)[-1]) from None
     else:
         out["epoch"] = None
     if out["provider"] == "rebound":
@@ -477,8 +477,8 @@ def _parse_tle_orbit(ctx, o, source):
     if "epoch" in o:
         try:
             out["epoch"] = parse_epoch(str(o["epoch"]))
-        except InputError:
-            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
+        except InputError as exc:
+            raise ctx.error("[orbit] epoch", str(exc).split(": ", 1)[-1]) from None
     return out
 
 

@@ -43,7 +43,7 @@ from ..torques import Facet
 from .fields import parse_choice, parse_quantity, parse_vector
 from .ranges import RANGES
 
-__all__ = ["FACET_KEYS", "TORQUE_KEYS", "ENVIRONMENT_KEYS", "parse_torques"]
+__all__ = ["FACET_KEYS", "TORQUE_KEYS", "ENVIRONMENT_KEYS", "parse_torques", "check_field_epoch"]
 
 FACET_KEYS = {"area", "normal", "position", "drag_coefficient", "specular", "diffuse"}
 TORQUE_KEYS = {"drag", "srp", "residual_dipole", "constant"}
@@ -52,6 +52,18 @@ ENVIRONMENT_KEYS = {"atmosphere", "density0", "altitude0", "scale_height", "coro
 ATMOSPHERES = ("exponential", "nrlmsis", "none")
 FIELDS = ("igrf", "dipole", "none")
 SHADOWS = ("conical", "cylindrical", "none")
+
+
+def check_field_epoch(ctx, field, epoch):
+    """Refuse, naming ``[orbit] epoch``, an epoch outside IGRF-14's span 1900-2030 for the
+    ``field`` model (``"igrf"`` or ``"dipole"``: both read IGRF's coefficients), before any
+    frame transform warns about the year."""
+    from ..environment.magnetic import check_igrf_instants
+
+    try:
+        check_igrf_instants(epoch, "[orbit] epoch")
+    except InputError as exc:
+        raise ctx.error("[orbit] epoch", f"{str(exc).split(': ', 1)[-1]} (magnetic_field = {field!r})") from None
 
 
 def _bool(ctx, where, value):
@@ -186,6 +198,8 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
                                                         "[control]")
     if field != "none" and epoch is None:
         raise ctx.error("[orbit] epoch", f"missing; the {field} field needs the date (give [orbit] epoch)")
+    if field != "none":
+        check_field_epoch(ctx, field, epoch)
     if srp and epoch is None:
         raise ctx.error("[orbit] epoch", "missing; SRP needs the date to place the Sun (give [orbit] epoch)")
     out_env["magnetic_field"] = field
