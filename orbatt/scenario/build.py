@@ -24,6 +24,7 @@ from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
 from ..torques import EnvironmentTorques, sample_margin
 from ..orbital import state_from_orbital
+from .work import torque_rates
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
            "build_potential",
@@ -40,6 +41,9 @@ MAX_WORK_STEPS = DEFAULT_MAX_STEPS
 #: most angle (rad) one step of any method covers, for :func:`check_work`'s lower estimate
 #: (DOP853 at rtol 1e-3 takes about 1 rad per step of a rotation; at 1e-12, 0.1 rad)
 MAX_ANGLE_PER_STEP = math.pi
+#: smallest moment of inertia (kg m^2) blamed before the torque acting on it when the two make
+#: a run too stiff: a body lighter than a 1 g, 3 cm chip
+TINY_INERTIA = 1e-7
 
 
 def build_kepler_orbit(ctx, o):
@@ -240,27 +244,49 @@ def build_initial_state(ctx, spec, body, orbit):
         raise ctx.error("[initial]", str(exc)) from None
 
 
-def check_work(ctx, t_end, period, state0=None):
+def check_work(ctx, t_end, period, state0=None, spec=None, step=None):
     """Refuse a run that cannot end in reasonable time, before it starts.
 
     A lower estimate of the steps any method needs: the body turns by ``|omega0| t_end``
-    (``omega0`` the initial body rate of ``state0``, if given) and the gravity-gradient potential, which depends on
-    twice the orbital angle, by ``2 (2 pi) t_end / period``; no method covers more than
-    :data:`MAX_ANGLE_PER_STEP` per step. Above :data:`MAX_WORK_STEPS` the error names the key
-    that dominates (``[initial]`` rates or ``[orbit] a``) and ``t_end``.
+    (``omega0`` the initial body rate of ``state0``, if given) and the gravity-gradient
+    potential, which depends on twice the orbital angle, by ``2 (2 pi) t_end / period``; the
+    torques and control laws of ``spec`` (if given) turn it at their own rates
+    (:func:`orbatt.scenario.work.torque_rates`: ``sqrt(tau / I)``, ``sqrt(kp / I)``, ``kd /
+    I``, ...); no method covers more than :data:`MAX_ANGLE_PER_STEP` per step. A fixed
+    ``step`` (s) needs ``t_end / step`` steps. Above :data:`MAX_WORK_STEPS` the error names the
+    key that dominates (``[initial]`` rates, ``[orbit] a``, the torque's or the law's key,
+    ``[integration] step``) and ``t_end``.
     """
+    if step is not None and not t_end / step <= MAX_WORK_STEPS:
+        raise ctx.error("[integration] step", f"{step:.6g} over t_end = {t_end:.6g} is {t_end / step:.3g} steps, more "
+                                              f"than {MAX_WORK_STEPS:.0e} (hours of computing); give a longer step or "
+                                              "shorten t_end")
     orbit = 4 * math.pi * t_end / period if period else 0.0
-    if _spin_bound(state0) * t_end + orbit <= MAX_WORK_STEPS * MAX_ANGLE_PER_STEP * (1.0 - 1e-9):
+    rates = [] if spec is None else torque_rates(spec)
+    torque = sum(r for r, _, _ in rates) * t_end
+    if _spin_bound(state0) * t_end + orbit + torque <= MAX_WORK_STEPS * MAX_ANGLE_PER_STEP * (1.0 - 1e-9):
         return  # far enough below the limit by an upper bound of the spin (no need of omega)
     spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
-    steps = (spin + orbit) / MAX_ANGLE_PER_STEP
-    if not steps <= MAX_WORK_STEPS:  # NaN included
-        where = "[initial]" if spin >= orbit else "[orbit] a"
-        what = (f"the body turns {spin:.3g} rad" if spin >= orbit
-                else f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times")
-        fix = "lower the rates (omega, Q)" if spin >= orbit else "raise a"
-        raise ctx.error(where, f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps, more than "
-                               f"{MAX_WORK_STEPS:.0e} (hours of computing); {fix} or shorten [integration] t_end")
+    steps = (spin + orbit + torque) / MAX_ANGLE_PER_STEP
+    if steps <= MAX_WORK_STEPS:
+        return
+    top = max(rates, default=(0.0, "", ""))
+    if top[0] * t_end >= max(spin, orbit) or not math.isfinite(steps):
+        rate, key, what = top
+        if math.isfinite(rate):
+            tiny = float(np.min(spec.inertia)) * 1e6 < TINY_INERTIA
+            where = "[body] inertia" if tiny else key
+            what = f"{what} ({key})" if tiny else what
+            raise ctx.error(where, f"{what} sets a time scale of {1.0 / rate:.3g} s: at least {steps:.3g} integration steps "
+                                   f"over t_end = {t_end:.6g} s, more than {MAX_WORK_STEPS:.0e} (hours of computing, "
+                                   "a stiff problem); give a physical value (or raise [body] inertia, shorten "
+                                   "[integration] t_end)")
+    where = "[initial]" if spin >= orbit else "[orbit] a"
+    what = (f"the body turns {spin:.3g} rad" if spin >= orbit
+            else f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times")
+    fix = "lower the rates (omega, Q)" if spin >= orbit else "raise a"
+    raise ctx.error(where, f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps, more than "
+                           f"{MAX_WORK_STEPS:.0e} (hours of computing); {fix} or shorten [integration] t_end")
 
 
 def _spin_bound(state0):

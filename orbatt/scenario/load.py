@@ -69,7 +69,7 @@ class Scenario:
             kepler = build_kepler_orbit(ctx, spec.orbit)
             period = kepler.period_value
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
-        check_work(ctx, self.t_end, period)  # the orbit alone, before REBOUND samples it
+        check_work(ctx, self.t_end, period, spec=spec)  # the orbit and the torques, before anything is sampled
         check_field_span(ctx, spec, float(self.times[-1]))
         if provider == "tle":
             self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]), environment_margin(spec))
@@ -78,13 +78,13 @@ class Scenario:
                           else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))
         self.potential = build_potential(spec, self.orbit, float(self.times[-1]))
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
-        check_work(ctx, self.t_end, period, self.state0)
         self.method = spec.integration["method"]
         self.settings = {k: spec.integration[k] for k in ("rtol", "atol", "independent_variable")
                          if k in spec.integration}
         if "step" in spec.integration:
             kind, value = spec.integration["step"]
             self.settings["step"] = value * period if kind == "orbits" else value
+        check_work(ctx, self.t_end, period, self.state0, spec, self.settings.get("step"))
 
     def run(self, method=None, progress=False, **overrides):
         """Propagate and return the result :class:`xarray.Dataset` (see :mod:`orbatt.dataset`).
