@@ -188,6 +188,9 @@ def _output_path(args, sc, *, zarr=False):
     from .dataset import check_output_path, file_name
     from .errors import InputError
 
+    if args.output is not None and not args.output.strip():
+        raise InputError(f"-o: {args.output!r} is an empty path; give an output file such as -o result.nc (or leave "
+                         "-o out for NAME.nc)")
     what = "-o" if args.output else "name"
     out = Path(args.output) if args.output else Path(file_name(sc.name, ".nc"))
     src = Path(sc.path) if getattr(sc, "path", None) is not None else None
@@ -235,6 +238,8 @@ def _checked_aem(path, source=None):
     from .dataset.aem import is_orbatt_aem
     from .errors import InputError
 
+    if not path.strip():
+        raise InputError(f"--aem: {path!r} is an empty path; give a file such as --aem attitude.aem")
     p = Path(path)
     if source is not None and Path(source).is_file() and p.exists() and os.path.samefile(source, p):
         raise InputError(f"--aem: {path!r} is the file being read; give another path such as 'attitude.aem'")

@@ -29,7 +29,7 @@ from .work import torque_rates
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
            "build_potential",
            "build_environment_torques", "build_control", "build_initial_state",
-           "build_output_times", "check_work", "check_field_span", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
+           "build_output_times", "check_work", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
 #: time (2e7 outputs: 7.2 GB, and the run needs working copies of it)
@@ -242,6 +242,16 @@ def build_initial_state(ctx, spec, body, orbit):
         raise
     except InputError as exc:
         raise ctx.error("[initial]", str(exc)) from None
+
+
+def estimate_steps(t_end, period, state0=None, spec=None, step=None):
+    """:func:`check_work`'s lower estimate of the integration steps of one run (a float)."""
+    if step is not None:
+        return t_end / step
+    orbit = 4 * math.pi * t_end / period if period else 0.0
+    torque = 0.0 if spec is None else sum(r for r, _, _ in torque_rates(spec)) * t_end
+    spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
+    return (spin + orbit + torque) / MAX_ANGLE_PER_STEP
 
 
 def check_work(ctx, t_end, period, state0=None, spec=None, step=None):

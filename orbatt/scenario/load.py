@@ -15,7 +15,8 @@ from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
-                    build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin, tle_period)
+                    build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin,
+                    estimate_steps, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
 from ..dataset.build import dataset_content
@@ -85,6 +86,8 @@ class Scenario:
             kind, value = spec.integration["step"]
             self.settings["step"] = value * period if kind == "orbits" else value
         check_work(ctx, self.t_end, period, self.state0, spec, self.settings.get("step"))
+        #: check_work's lower estimate of the integration steps (a sweep multiplies it by its cases)
+        self.work_steps = estimate_steps(self.t_end, period, self.state0, spec, self.settings.get("step"))
 
     def run(self, method=None, progress=False, **overrides):
         """Propagate and return the result :class:`xarray.Dataset` (see :mod:`orbatt.dataset`).

@@ -155,6 +155,9 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     for name, on in (("drag", drag), ("srp", srp)):
         if on and not facets:
             raise ctx.error(f"[torques] {name}", "needs the body's flat plates: add [[body.facets]] tables")
+    if facets and not (drag or srp):
+        raise ctx.error("[[body.facets]]", "only read by [torques] drag or srp, both false here; set drag = true or "
+                                           "srp = true, or remove the facets")
     epoch = None if orbit is None else orbit.get("epoch")
     atmosphere = parse_choice(ctx, "[environment] atmosphere", env.get("atmosphere", "exponential" if drag else "none"),
                               ATMOSPHERES)
