@@ -27,7 +27,7 @@ from .. import units as U
 from ..errors import InputError
 
 __all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "gcrs_to_itrs",
-           "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84"]
+           "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84", "DatesWarning", "one_dates_warning"]
 
 #: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
 #: and the default occulting body of the shadow function
@@ -46,6 +46,48 @@ def offline_iers():
 
     with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
         yield
+
+
+class DatesWarning(UserWarning):
+    """The instants of a run lie outside astropy's bundled Earth orientation or leap-second
+    tables: the frame rotations (and the Sun) extrapolate them."""
+
+
+@contextlib.contextmanager
+def one_dates_warning(what):
+    """Gather astropy's and ERFA's warnings about dates outside their tables (one per call and
+    quantity: tens of lines over a run's environment tables) into one :class:`DatesWarning`
+    naming ``what`` (e.g. the epoch); other warnings pass through."""
+    import warnings
+
+    from astropy.utils.exceptions import AstropyWarning
+    from erfa import ErfaWarning
+
+    caught = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            yield
+    finally:  # also when the body raises: the warnings it gave still come out
+        _replay(caught, what, ErfaWarning, AstropyWarning)
+
+
+def _replay(caught, what, *date_categories):
+    """Re-emit the warnings ``caught`` once each, those of ``date_categories`` as one
+    :class:`DatesWarning` about ``what``."""
+    import warnings
+
+    dates = [w for w in caught if issubclass(w.category, date_categories)]
+    seen = set()
+    for w in caught:
+        key = (w.category, str(w.message))
+        if w not in dates and key not in seen:
+            seen.add(key)
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if dates:
+        warnings.warn(f"{what} lies outside the Earth orientation and leap-second tables bundled with astropy; the "
+                      f"frames are extrapolated (arcsecond level; astropy said: {' '.join(str(dates[0].message).split())[:160]})",
+                      DatesWarning, stacklevel=4)
 
 
 def as_time_array(t, n=None, name="t"):

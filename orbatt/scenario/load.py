@@ -2,6 +2,7 @@
 :func:`load_scenario` from a file or a shipped name, :func:`shipped_scenarios`."""
 from __future__ import annotations
 
+import contextlib
 import copy
 import threading
 import warnings
@@ -13,6 +14,7 @@ from astropy import units as u
 
 from .. import units as U
 from ..body import RigidBody
+from ..environment.frames import one_dates_warning
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
                     build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin,
@@ -120,15 +122,23 @@ class Scenario:
         kw = dict(self.settings)
         kw.update(overrides)
         m = method or self.method
-        try:
-            traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
-        except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
-            raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
-        except IntegrationError as exc:
-            partial = getattr(exc, "trajectory", None)
-            exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
-            raise
-        return self._content(traj)
+        epoch = None if self.orbit is None else self.orbit.epoch
+        if epoch is not None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                epoch = f"the run from {epoch.utc.isot} (+ {self.t_end:g} s)"
+        # ERFA's and astropy's warnings for dates beyond their tables (tens of lines from the
+        # environment's tables and the outputs) come out as one
+        with one_dates_warning(epoch) if epoch is not None else contextlib.nullcontext():
+            try:
+                traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
+            except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
+                raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
+            except IntegrationError as exc:
+                partial = getattr(exc, "trajectory", None)
+                exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
+                raise
+            return self._content(traj)
 
     def _content(self, traj):
         epoch = self.orbit.epoch if self.orbit is not None else None
