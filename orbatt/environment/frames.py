@@ -85,9 +85,9 @@ def _replay(caught, what, *date_categories):
             seen.add(key)
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if dates:
+        said = " ".join(str(dates[0].message).split())[:160]
         warnings.warn(f"{what} lies outside the Earth orientation and leap-second tables bundled with astropy; the "
-                      f"frames are extrapolated (arcsecond level; astropy said: {' '.join(str(dates[0].message).split())[:160]})",
-                      DatesWarning, stacklevel=4)
+                      f"frames are extrapolated (arcsecond level; astropy said: {said})", DatesWarning, stacklevel=4)
 
 
 def as_time_array(t, n=None, name="t"):

@@ -32,8 +32,8 @@ __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "envi
            "build_output_times", "check_work", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
-#: time (2e7 outputs: 7.2 GB, and the run needs working copies of it)
-MAX_OUTPUTS = 20_000_000
+#: time and the run needs working copies of it (2e6 outputs: 0.7 GB; a day every 0.05 s)
+MAX_OUTPUTS = 2_000_000
 #: most integration steps a scenario may need by the lower estimate of :func:`check_work`
 #: (the default ``max_steps`` of :func:`orbatt.propagate`: a run needing more would stop
 #: there after many minutes)

@@ -56,13 +56,14 @@ class Range:
     def text(self):
         """The range as a reader writes it: ``"[1e-14, 1e51] kg m2"``, ``"|x| <= 1e4 rad/s"``."""
         unit = f" {self.unit}" if self.unit else ""
+        lo, hi = (None if x is None else f"{x:g}".replace("e+", "e") for x in (self.low, self.high))
         if self.signed:
-            return f"|x| <= {self.high:g}{unit}"
-        if self.high is None:
-            return f">= {self.low:g}{unit}"
-        if self.low is None:
-            return f"<= {self.high:g}{unit}"
-        return f"[{self.low:g}, {self.high:g}]{unit}"
+            return f"|x| <= {hi}{unit}"
+        if hi is None:
+            return f">= {lo}{unit}"
+        if lo is None:
+            return f"<= {hi}{unit}"
+        return f"[{lo}, {hi}]{unit}"
 
 
 #: ``{(table, key): Range}``: the physical range of each numeric key (table as in

@@ -40,8 +40,9 @@ the paper's Sect. 6.2 orbit).
 Work limits, checked before the run: at most :data:`~orbatt.scenario.build.MAX_OUTPUTS`
 output times (``t_end / output_step``), and at most
 :data:`~orbatt.scenario.build.MAX_WORK_STEPS` integration steps by a lower estimate (the
-body's rotation angle ``|omega| t_end`` and twice the orbital angle, at most pi rad per
-step): a run past them would take hours or fail at ``max_steps``.
+body's rotation angle ``|omega| t_end``, twice the orbital angle and the angles of the torques'
+and control laws' time scales, :mod:`orbatt.scenario.work`, at most pi rad per step; a fixed
+step's count): a run past them would take hours or fail at ``max_steps``.
 
 Outputs fall exactly on ``k * output_step`` for ``k = 0 .. floor(t_end / output_step)``.
 ``Q`` is in the unit implied by the inertia and time units (kg km^2 s^-1 for a dimensional
