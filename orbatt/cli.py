@@ -373,10 +373,15 @@ def _check_variables(ds, path, names, what):
 def _cmd_scenarios(args):
     from .scenario import shipped_scenarios
 
+    import shutil
+    import textwrap
+
     rows = shipped_scenarios()
     width = max(len(n) for n, _, _ in rows)
-    for name, desc, _ in rows:
-        print(f"{name:<{width}}  {desc}")
+    columns = max(shutil.get_terminal_size((100, 24)).columns, width + 40)
+    for name, desc, _ in rows:  # the description re-wrapped, its lines indented under the first
+        print(textwrap.fill(" ".join(desc.split()), width=columns - 1, initial_indent=f"{name:<{width}}  ",
+                            subsequent_indent=" " * (width + 2), break_on_hyphens=False))
     return 0
 
 
