@@ -54,7 +54,7 @@ def parse_epoch(epoch, name="epoch"):
         s = epoch.strip()
         m = _ISO.fullmatch(s)
         if m is None:
-            raise InputError(f"{name}: {epoch!r} is not an ISO 8601 UTC time; write e.g. "
+            raise InputError(f"{name}: {epoch!r} is not a time in ISO 8601 calendar form; write e.g. "
                              "'2024-01-01T00:00:00Z' (UTC)")
         try:
             with warnings.catch_warnings():  # ERFA's "dubious year" and friends: checked below
