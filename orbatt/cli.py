@@ -218,10 +218,12 @@ def _plot_stem(args, sc):
 def _aem_path(args, sc, out):
     """The ``--aem`` file of ``run``, checked before the run: the scenario needs an epoch, and
     the path the checks of ``-o`` (:func:`_checked_aem`), other than the NetCDF output."""
-    if not args.aem:
+    if args.aem is None:
         return None
     from .errors import InputError
 
+    if not args.aem.strip():
+        raise InputError(f"--aem: {args.aem!r} is an empty path; give a file such as --aem attitude.aem")
     if sc.spec.dimensionless or sc.orbit is None or getattr(sc.orbit, "epoch", None) is None:
         raise InputError("--aem: an AEM needs absolute times and this scenario has no epoch (no [orbit] with "
                          "epoch); add one or leave --aem out")

@@ -154,7 +154,8 @@ def dimension_phrase(unit) -> str:
     """The dimension of ``unit`` in words with its article, for messages: ``"a length"``,
     ``"an angular frequency"`` (the first of astropy's names), or ``"a quantity in A m2 s /
     T"`` where astropy has no name for it."""
-    kind = str(unit.physical_type).split("/")[0]
+    names = str(unit.physical_type).split("/")
+    kind = "torque" if "torque" in names else names[0]  # N m: a torque in orbatt's keys, not an energy
     if kind == "unknown":
         return f"a quantity in {unit.to_string()}"
     return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
