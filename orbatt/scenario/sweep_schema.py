@@ -17,6 +17,7 @@ from ..dataset import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from .fields import parse_int, parse_quantity
 from ..orbits import R_EARTH
 from .key_docs import parse_key_docs
+from .ranges import RANGES
 
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
            "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
@@ -55,6 +56,10 @@ DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
 DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "normal": ("mean", "std"), "truncnormal": ("mean", "std", "low", "high")}
 MAX_CASES = 100_000_000
+#: the physical range of each kind of parameter: that of the key it replaces
+#: (:data:`orbatt.scenario.ranges.RANGES`; angles are bounded by the field parser)
+KIND_RANGES = {"inertia": RANGES["body", "inertia"], "rate": RANGES["initial", "omega"],
+               "length": RANGES["orbit", "a"]}
 #: central body radii (km): a sweep's orbit whose apoapsis lies below is refused
 BODY_RADII = {"earth": R_EARTH}
 #: most values of one grid: a longer list takes minutes to read before any limit on the cases
@@ -308,8 +313,12 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
         cf = units[name]
 
-        def q(key, value, _where=where, _unit=unit, _dimless=dimless):
-            return parse_quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless)
+        # the physical range of the key the parameter replaces (dimensional scenarios; a std
+        # is a spread of the same quantity, bounded alike)
+        rng = None if dimensionless else KIND_RANGES.get(p.kind)
+
+        def q(key, value, _where=where, _unit=unit, _dimless=dimless, _rng=rng):
+            return parse_quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless, bounds=_rng)
 
         d = raw[name]
         if not isinstance(d, dict):
