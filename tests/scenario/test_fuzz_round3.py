@@ -92,6 +92,9 @@ PARSE_CASES = [
                                      "drag_coefficient = 500\nspecular = 0.0\ndiffuse = 0.2\n\n[[body.facets]]"),
      r"\[\[body.facets\]\] 5 drag_coefficient"),
     ("angle of 1e6 deg", edit(LEO, 'i = "98.2 deg"', 'i = "1e6 deg"'), r"\[orbit\] i"),
+    ("sweep rate spread 1e9 deg/s", edit(DISPERSION, 'omega1 = { distribution = "normal", std = "0.01 deg/s" }',
+                                         'omega1 = { distribution = "normal", std = "1e9 deg/s" }'),
+     r"\[sweep.parameters.omega1\] std"),
     # accepted before, refused now
     ("IGRF at 2500", cubesat("2025-03-20T00:00:00", "2500-01-01T00:00:00"), r"\[orbit\] epoch"),
     ("invalid leap second", cubesat("2025-03-20T00:00:00", "2017-06-30T23:59:60"), r"\[orbit\] epoch"),
@@ -157,6 +160,18 @@ def test_a_sweep_of_ten_million_cases_is_refused_before_drawing(tmp_path):
     with pytest.raises(ScenarioError, match=r"s.toml: \[sweep\] samples: 10000000 cases"):
         load_sweep(p)
     assert time.perf_counter() - t0 < 30.0
+
+
+def test_a_random_orbit_inside_the_earth_is_refused_or_redrawn(tmp_path):
+    from orbatt.errors import InputError
+    from orbatt.sweep import load_sweep
+
+    text = edit(DISPERSION, RANDOM, 'orbit_a = { distribution = "normal", std = "3000 km" }', INERTIAS, "",
+                "samples = 2000", "samples = 200", 'on_invalid = "resample"\n', "")
+    with pytest.raises(InputError, match=r"\[sweep.parameters\] orbit_a: case \d+ drew a = .* inside the Earth"):
+        load_sweep(write(tmp_path, text))
+    sweep = load_sweep(write(tmp_path, edit(text, "samples = 200", 'samples = 200\non_invalid = "resample"'), "r.toml"))
+    assert sweep.resampled > 0 and np.all(sweep.values["orbit_a"] > 6378.1)
 
 
 def test_a_leap_second_runs_with_igrf_and_the_field_is_continuous_across_it(tmp_path):
