@@ -25,6 +25,10 @@ __all__ = ["Range", "RANGES", "key_bounds", "range_text", "ANGLE_LIMIT"]
 ANGLE_LIMIT = 1000.0
 
 
+#: ``(Range, unit) -> (low, high)``: :meth:`Range.bounds` computed before
+_BOUNDS = {}
+
+
 @dataclass(frozen=True)
 class Range:
     """Inclusive physical range of one key, in ``unit`` (an astropy unit string; ``""`` for
@@ -47,6 +51,13 @@ class Range:
 
     def bounds(self, unit):
         """``(low, high)`` in the astropy ``unit`` (the key's internal unit)."""
+        key = (self, unit)
+        out = _BOUNDS.get(key)
+        if out is None:  # a unit conversion (~50 us) once per key and unit: parsers call this per value
+            out = _BOUNDS[key] = self._bounds(unit)
+        return out
+
+    def _bounds(self, unit):
         f = 1.0 if not self.unit else float((1.0 * u.Unit(self.unit)).to_value(unit))
         hi = None if self.high is None else self.high * f
         if self.signed:
