@@ -365,14 +365,9 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         except InputError as exc:
             raise ctx.error("[[body.wheels]] inertia", str(exc).split(": ", 1)[-1]) from None
     sweep = None
-    if "sweep" in data and control is not None:
-        raise ctx.error("[sweep]", "sweeps of scenarios with [control] or [[body.wheels]] are not supported yet; run "
-                                   "the cases one by one")
-    if "sweep" in data and torques is not None:
-        raise ctx.error("[sweep]", "sweeps of scenarios with [torques] are not supported yet; run the cases one by one")
     if "sweep" in data:
         sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
-                                  frame=frame)
+                                  frame=frame, conservative=control is None and torques is None)
     name = data.get("name", Path(source).stem)
     desc = data.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):

@@ -223,7 +223,7 @@ def limits_text(p: Parameter, unit_text):
     return f"{lb}{lo}, {hi}{hb} {unit_text}".rstrip()
 
 
-def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame):
+def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame, conservative=True):
     """Validate a ``[sweep]`` table (called by :func:`orbatt.scenario.schema.parse`).
 
     Parameters
@@ -239,6 +239,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         The validated ``[orbit]`` table.
     frame : str
         ``[initial] frame``.
+    conservative : bool
+        Whether the scenario has a conserved energy (no ``[torques]``, no ``[control]``):
+        ``final_energy_error`` needs one.
 
     Returns
     -------
@@ -249,9 +252,6 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     ScenarioError
         Naming ``[sweep] key`` or ``[sweep.parameters.NAME] key``, the value and the fix.
     """
-    if orbit is not None and orbit["provider"] == "tle":
-        raise ctx.error("[sweep]", "sweeps over a TLE orbit (provider = 'tle') are not supported; "
-                                   "use a kepler or rebound orbit for a sweep")
     for k in table:
         if k not in SWEEP_KEYS:
             raise ctx.error(f"[sweep] {k}", f"unknown key; allowed keys in [sweep]: {', '.join(sorted(SWEEP_KEYS))}")
@@ -272,6 +272,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         if p.group == "orbit":
             if orbit is None:
                 raise ctx.error(where, "orbit elements vary only in a scenario with an [orbit]")
+            if orbit["provider"] == "tle":
+                raise ctx.error(where, "a TLE orbit (provider = 'tle') is shared by all cases: its elements do not "
+                                       "vary; use a kepler or rebound orbit to vary them")
             if name in ("orbit_true_anomaly", "orbit_mean_anomaly") and name[6:] != orbit["anomaly_kind"]:
                 raise ctx.error(where, f"the [orbit] gives {orbit['anomaly_kind']}; vary orbit_{orbit['anomaly_kind']}")
         unit = parameter_unit(p.kind)
@@ -364,6 +367,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             if o not in OUTPUTS:
                 raise ctx.error("[sweep] outputs", f"{o!r} is not one of {', '.join(map(repr, OUTPUTS))}")
         spec.outputs = tuple(o for o in OUTPUTS if o in outs)
+        if "final_energy_error" in spec.outputs and not conservative:
+            raise ctx.error("[sweep] outputs", "'final_energy_error' needs a conserved energy: this scenario has "
+                                               "[torques] or [control] (non-conservative); remove the output")
     if "pointing_axis" in table:
         ax = table["pointing_axis"]
         if not (isinstance(ax, list) and len(ax) == 3 and all(isinstance(x, (int, float)) and not isinstance(x, bool)

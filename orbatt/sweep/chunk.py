@@ -9,6 +9,7 @@ Quantities are in internal units (:mod:`orbatt.units`); frames as in ``docs/desi
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import time
@@ -23,11 +24,10 @@ from ..core import potentials as kp
 from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
-from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_rebound_orbit, parse
+from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
                                      parameter_units)
 from .sampling import nominal_rates
-from ..potentials import GravityGradient
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
 from ..orbits.base import as_times
@@ -102,7 +102,10 @@ def orbit_groups(sc, spec, values, n):
             orbit = build_kepler_orbit(ctx, o)
             if o["provider"] == "rebound":
                 orbit = build_rebound_orbit(ctx, o, orbit, float(sc.times[-1]))
-        out.append((orbit, GravityGradient(orbit), np.flatnonzero(inverse == g)))
+            # the single run's builder: the gravity gradient, or the environment torques and
+            # control law along this orbit (sampled over the run as the case's own run samples them)
+            potential = build_potential(dataclasses.replace(sc.spec, orbit=o), orbit, float(sc.times[-1]))
+        out.append((orbit, potential, np.flatnonzero(inverse == g)))
     return out
 
 
@@ -139,14 +142,23 @@ def initial_states(sc, spec, values, axis, inertia, orbit, idx):
     else:
         q = q_c
     q = unit_quaternion(q)
+    if sc.body.wheels:  # a gyrostat: Q holds the wheels' momentum too, as the case's own run builds it
+        iu = sc.body.inertia_unit
+        Q = np.empty((m, 4))
+        for e in range(m):
+            body = RigidBody(inertia[idx[e]].tolist() if sc.body.dimensionless else inertia[idx[e]] * iu,
+                             wheels=sc.body.wheels)
+            Q[e] = State.from_omega(body, q[e], w[e] if body.dimensionless else w[e] * body.rate_unit).Q
+        return q, Q
     st = State(sc.body, q, cn.momentum_from_omega(q, w, inertia[idx]))
     return st.q, st.Q
 
 
 def propagate_group(sc, bodies, q0, Q0, potential):
     """Ensemble propagation of one group: ``(trajectory or None, q, Q, failed, stats)``,
-    ``q, Q`` (m, N, 4). A member that fails is rerun alone and left NaN (members are
-    independent, so the others' results do not change)."""
+    ``q, Q`` (m, N, 4); the trajectory's ``wheel_momenta`` (m, N, n) hold the wheels' momenta
+    of a gyrostat. A member that fails is rerun alone and left NaN (members are independent,
+    so the others' results do not change)."""
 
     kw = dict(sc.settings)
     m = q0.shape[0]
@@ -160,6 +172,7 @@ def propagate_group(sc, bodies, q0, Q0, potential):
     N = sc.times.size
     q = np.full((m, N, 4), np.nan)
     Q = np.full((m, N, 4), np.nan)
+    W = None
     stats = {}
     tr = None
     for e in range(m):
@@ -171,7 +184,13 @@ def propagate_group(sc, bodies, q0, Q0, potential):
             continue
         tr = t1
         q[e], Q[e] = t1.q[0], t1.Q[0]
+        if t1.wheel_momenta is not None:
+            if W is None:
+                W = np.full((m, N, t1.wheel_momenta.shape[-1]), np.nan)
+            W[e] = t1.wheel_momenta[0]
         add_stats(stats, t1.stats)
+    if tr is not None:
+        tr = dataclasses.replace(tr, q=q, Q=Q, wheel_momenta=W)
     return tr, q, Q, failed, stats
 
 
@@ -264,7 +283,8 @@ def compute_chunk(sc, spec, job, units):
     if vary_inertia:
 
         iu = sc.body.inertia_unit
-        all_bodies = [RigidBody(inertia[e].tolist() if dimless else inertia[e] * iu) for e in range(n)]
+        all_bodies = [RigidBody(inertia[e].tolist() if dimless else inertia[e] * iu, wheels=sc.body.wheels)
+                      for e in range(n)]
     outs = set(spec.outputs)
     res = {name: np.empty((n, 4)) for name in ("q_initial", "Q_initial", "q_final", "Q_final")}
     res.update(inertia=inertia, failed=np.zeros(n, dtype=bool), pointing_error=np.full(n, np.nan),
@@ -290,7 +310,8 @@ def compute_chunk(sc, spec, job, units):
             body0 = bodies[0]
             full = Trajectory(body=body0, potential=potential, t=sc.times, q=q, Q=Q,
                               inertia=inertia[idx], method=tr.method if tr is not None else sc.method,
-                              settings=tr.settings if tr is not None else {}, stats=st, complete=True)
+                              settings=tr.settings if tr is not None else {}, stats=st, complete=True,
+                              wheel_momenta=None if tr is None else tr.wheel_momenta)
             with np.errstate(invalid="ignore"):
                 piece = to_dataset(full, scenario_text=sc.text, title=f"orbatt sweep: {sc.name}")
             piece = piece.assign_coords(case=("case", start + idx, piece["case"].attrs))

@@ -31,7 +31,7 @@ def nominal_values(scenario):
     w = nominal_rates(scenario)
     out.update({f"omega{k + 1}": float(w[k]) for k in range(3)})
     out["attitude_angle"] = 0.0
-    if spec.orbit is not None:
+    if spec.orbit is not None and spec.orbit["provider"] != "tle":  # a TLE's elements do not vary
         o = spec.orbit
         out.update(orbit_a=o["a"], orbit_e=o["e"], orbit_i=o["i"], orbit_raan=o["raan"], orbit_argp=o["argp"])
         out[f"orbit_{o['anomaly_kind']}"] = o["anomaly"]
