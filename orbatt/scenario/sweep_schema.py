@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import units as U
 from ..dataset import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
+from .study_schema import parse_study_keys
 from .fields import parse_int, parse_quantity
 from .key_docs import parse_key_docs
 
@@ -23,7 +24,7 @@ __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "D
 
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
-              "tumbling_angle", "on_invalid")
+              "tumbling_angle", "on_invalid", "detumble_rate", "settling_angle", "window")
 #: what each key of [sweep] is: ``(dimension, default, meaning)`` (``docs/scenarios.md``), written
 #: as a table (:mod:`orbatt.scenario.key_docs`)
 SWEEP_KEY_DOCS = parse_key_docs("""
@@ -47,9 +48,16 @@ tumbling_angle      angle                   90 deg                              
                                                                                                tumbles
 on_invalid          'error' | 'resample'    'error'                                            what to do with a draw outside the
                                                                                                physical limits
+detumble_rate       angular velocity        required with 'detumble_time'                      detumble_time: the earliest time after
+                                                                                               which |omega| stays below it
+settling_angle      angle                   required with 'settling_time'                      settling_time: the earliest time after
+                                                                                               which the pointing error stays below it
+window              time                    the last orbit, else the last 10 % of the run      span before t_end that
+                                                                                               pointing_error_max/_rms summarize
 """)["sweep"]
 #: outputs that may be asked for
-OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error")
+OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error", "detumble_time",
+           "settling_time", "pointing_error", "max_wheel_speed", "wheel_saturated", "max_control_torque", "max_dipole")
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
 DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "normal": ("mean", "std"), "truncnormal": ("mean", "std", "low", "high")}
@@ -187,6 +195,9 @@ class SweepSpec:
     tumbling_angle: float = 0.5 * math.pi
     on_invalid: str = "error"
     energy: str | None = None   # "hamiltonian" or "jacobi": the conserved energy (when one exists)
+    detumble_rate: float | None = None   # rad/s (or plain): detumble_time's threshold
+    settling_angle: float | None = None  # rad: settling_time's threshold
+    window: float | None = None          # s (or plain): pointing_error's window; None: the default
 
     @property
     def grid(self) -> dict:
@@ -223,7 +234,8 @@ def limits_text(p: Parameter, unit_text):
     return f"{lb}{lo}, {hi}{hb} {unit_text}".rstrip()
 
 
-def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame, conservative=True):
+def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame, conservative=True, control=None,
+                      wheels=0):
     """Validate a ``[sweep]`` table (called by :func:`orbatt.scenario.schema.parse`).
 
     Parameters
@@ -242,6 +254,10 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     conservative : bool
         Whether the scenario has a conserved energy (no ``[torques]``, no ``[control]``):
         ``final_energy_error`` needs one.
+    control : PDControl or BDotControl or None
+        The scenario's control law (the study outputs that need one).
+    wheels : int
+        The number of reaction wheels.
 
     Returns
     -------
@@ -396,8 +412,10 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         if not 0 < spec.tumbling_angle <= math.pi:
             raise ctx.error("[sweep] tumbling_angle", f"{table['tumbling_angle']!r} is outside (0, 180] deg")
     for k in ("pointing_axis", "pointing_reference"):
-        if k in table and not {"max_pointing_error", "tumbling"} & set(spec.outputs):
-            raise ctx.error(f"[sweep] {k}", "only used with 'max_pointing_error' or 'tumbling' in outputs")
+        if k in table and not {"max_pointing_error", "tumbling", "settling_time", "pointing_error"} & set(spec.outputs):
+            raise ctx.error(f"[sweep] {k}", "only used with 'max_pointing_error', 'tumbling', 'settling_time' or "
+                                            "'pointing_error' in outputs")
+    parse_study_keys(ctx, table, spec, dimensionless=dimensionless, control=control, wheels=wheels)
     if "on_invalid" in table:
         if table["on_invalid"] not in ("error", "resample"):
             raise ctx.error("[sweep] on_invalid", f"{table['on_invalid']!r} is not 'error' or 'resample'")

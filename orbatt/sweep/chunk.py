@@ -28,6 +28,7 @@ from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potenti
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
                                      parameter_units)
 from .sampling import nominal_rates
+from .study import STUDY_OUTPUTS, study_outputs, target_pointing_error
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
 from ..orbits.base import as_times
@@ -289,6 +290,12 @@ def compute_chunk(sc, spec, job, units):
     res = {name: np.empty((n, 4)) for name in ("q_initial", "Q_initial", "q_final", "Q_final")}
     res.update(inertia=inertia, failed=np.zeros(n, dtype=bool), pointing_error=np.full(n, np.nan),
                energy_error=np.full(n, np.nan))
+    study = [o for o in STUDY_OUTPUTS if o in outs]
+    nw = len(sc.body.wheels)
+    for o in study:
+        for name in STUDY_OUTPUTS[o]:
+            res[name] = np.full((n, nw), np.nan) if o == "max_wheel_speed" else (
+                np.full((n, nw), -1, dtype=np.int8) if o == "wheel_saturated" else np.full(n, np.nan))
     stats = {}
     pieces = []
     for orbit, potential, idx in orbit_groups(sc, spec, values, n):
@@ -302,6 +309,8 @@ def compute_chunk(sc, spec, job, units):
         if {"max_pointing_error", "tumbling"} & outs:
             p = orbit.orbital_quaternion(sc.times) if spec.pointing_reference == "orbital" else None
             res["pointing_error"][idx] = np.max(pointing_error(spec, q, p), axis=-1)
+        if study:
+            _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, bad, res)
         if "final_energy_error" in outs:
             E0 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, 0], Q[:, 0], float(sc.times[0]))
             E1 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, -1], Q[:, -1], float(sc.times[-1]))
@@ -322,6 +331,32 @@ def compute_chunk(sc, spec, job, units):
             pieces.append(piece)
 
     return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
+
+
+def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, failed, res):
+    """The study outputs (:mod:`orbatt.sweep.study`) of the cases ``idx`` of one orbit group into
+    ``res``, case by case (a failed case keeps NaN, and -1 for the saturation flags)."""
+    control = getattr(potential, "control", None)
+    by_target = control is not None and control.law == "pd" and control.target in ("orbital", "inertial")
+    p = None
+    if orbit is not None and ((by_target and control.target == "orbital") or spec.pointing_reference == "orbital"):
+        p = orbit.orbital_quaternion(sc.times)
+    W = None if tr is None else tr.wheel_momenta
+
+    def pointing(t, qq):
+        pp = None if p is None else (p if t is sc.times else orbit.orbital_quaternion(t))
+        if by_target:
+            return target_pointing_error(control, qq, pp)
+        return pointing_error(spec, qq[None], pp if spec.pointing_reference == "orbital" else None)[0]
+
+    for j, e in enumerate(idx):
+        if failed[j]:
+            continue
+        body = bodies[j] if len(bodies) > 1 else bodies[0]
+        h = None if W is None else np.ascontiguousarray(W[j])
+        qj, Qj = np.ascontiguousarray(q[j]), np.ascontiguousarray(Q[j])
+        for name, v in study_outputs(sc, spec, potential, body, inertia[e], qj, Qj, h, pointing).items():
+            res[name][e] = v
 
 
 def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
@@ -375,6 +410,7 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
         what = ("H = T + U" if spec.energy == "hamiltonian" else "the Jacobi integral H - n h.G")
         data["final_energy_error"] = cf_variable(("case",), res["energy_error"], "1", f"relative change of the conserved energy "
                                           f"(E(t_end) - E(t0)) / |E(t0)|, E = {what}")
+    data.update(_study_variables(sc, spec, UN, res, coords))
     data["integration_failed"] = cf_variable(("case",), res["failed"].astype(np.int8), "1",
                                       "1 where the integration of the case stopped (its values are NaN)",
                                       flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="ok failed")
@@ -385,6 +421,45 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
         ds = xr.Dataset(data, coords=coords)
     ds.attrs["integration_stats"] = json.dumps(stats, sort_keys=True)
     return ds
+
+
+def _study_variables(sc, spec, UN, res, coords):
+    """The Dataset variables of the study outputs in ``res`` (SI; adds the ``wheel``
+    coordinate to ``coords`` when a wheel output is there)."""
+    outs = set(spec.outputs)
+    data = {}
+    if "detumble_time" in outs:
+        data["detumble_time"] = cf_variable(("case",), res["detumble_time"], UN["time"],
+                                            "time after which |omega| stays below detumble_rate (NaN: never)",
+                                            detumble_rate=spec.detumble_rate, located="cubic through 4 outputs")
+    if "settling_time" in outs:
+        data["settling_time"] = cf_variable(("case",), res["settling_time"], UN["time"],
+                                            "time after which the pointing error stays below settling_angle (NaN: "
+                                            "never)", settling_angle_rad=spec.settling_angle,
+                                            located="cubic through 4 outputs")
+    if "pointing_error" in outs:
+        what = "over the last orbit, else the last 10 % of the run" if spec.window is None else \
+            f"over the last {spec.window:g} {UN['time']} of the run"
+        data["pointing_error_max"] = cf_variable(("case",), res["pointing_error_max"], "rad",
+                                                 f"largest pointing error {what}")
+        data["pointing_error_rms"] = cf_variable(("case",), res["pointing_error_rms"], "rad",
+                                                 f"root mean square pointing error {what} (output times)")
+    if {"max_wheel_speed", "wheel_saturated"} & outs:
+        coords["wheel"] = cf_variable(("wheel",), np.arange(len(sc.body.wheels)), "1", "reaction wheel index")
+    if "max_wheel_speed" in outs:
+        data["max_wheel_speed"] = cf_variable(("case", "wheel"), res["max_wheel_speed"], UN["rate"],
+                                              "largest |speed| of each wheel relative to the body (output times)")
+    if "wheel_saturated" in outs:
+        data["wheel_saturated"] = cf_variable(("case", "wheel"), res["wheel_saturated"], "1",
+                                              "a wheel reached max_speed or max_torque", flag_values=np.array(
+                                                  [-1, 0, 1], dtype=np.int8), flag_meanings="failed free saturated")
+    if "max_control_torque" in outs:
+        data["max_control_torque"] = cf_variable(("case",), res["max_control_torque"] * 1e6, "N m",
+                                                 "largest |torque| the control applied (output times)")
+    if "max_dipole" in outs:
+        data["max_dipole"] = cf_variable(("case",), res["max_dipole"] * 1e6, "A m^2",
+                                         "largest |B-dot dipole| (output times)")
+    return data
 
 
 def concat_cases(pieces):
