@@ -320,6 +320,12 @@ def sweep_summary(ds, title="", run=None) -> str:
         lines.append(f"  tumbling    {int((np.asarray(ds['tumbling'].values) == 1).sum())} of {n} cases")
     if "final_energy_error" in ds:
         lines.append(f"  energy      max |relative error| {np.nanmax(np.abs(ds['final_energy_error'].values)):.3e}")
+    from .sweep.report import percentile_table
+
+    table = percentile_table(ds)
+    if table:
+        lines.append("  outputs over the cases (NaN: no value - never reached, or failed):")
+        lines.extend(table)
     return "\n".join(lines)
 
 

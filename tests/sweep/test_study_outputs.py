@@ -99,3 +99,26 @@ def test_study_keys_are_checked(base, extra, match):
     text = base + f'\n[sweep]\n{extra}\n[sweep.parameters]\nomega1 = {{ values = ["0.1 deg/s"] }}\n'
     with pytest.raises(ScenarioError, match=match):
         parse(text, "bad.toml")
+
+
+def test_info_prints_each_outputs_percentiles_and_nan_count():
+    import xarray as xr
+
+    from orbatt.cli import sweep_summary
+    from orbatt.sweep.report import percentile_table
+
+    rng = np.random.default_rng(3)
+    t = rng.uniform(100.0, 900.0, 400)
+    t[:7] = np.nan  # never detumbled
+    ds = xr.Dataset({"detumble_time": ("case", t, {"units": "s"}),
+                     "pointing_error_max": ("case", np.full(400, np.deg2rad(2.0)), {"units": "rad"}),
+                     "integration_failed": ("case", np.zeros(400, dtype=np.int8))},
+                    coords={"case": np.arange(400)}, attrs={"sweep_cases": 400})
+    lines = percentile_table(ds)
+    row = next(x for x in lines if x.strip().startswith("detumble_time")).split()
+    expect = np.percentile(t[7:], [0, 50, 95, 99, 100])
+    np.testing.assert_allclose([float(v) for v in row[1:6]], expect, rtol=1e-3)
+    assert row[6] == "7" and row[7] == "s"
+    row = next(x for x in lines if x.strip().startswith("pointing_error_max")).split()
+    assert float(row[1]) == pytest.approx(2.0, rel=1e-3) and row[-1] == "deg"  # angles in degrees
+    assert "detumble_time" in sweep_summary(ds, title="x")
