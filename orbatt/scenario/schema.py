@@ -369,7 +369,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
                                   frame=frame, conservative=control is None and torques is None,
                                   control=None if control is None else control["control"],
-                                  wheels=0 if control is None else len(control["wheels"]))
+                                  wheels=0 if control is None else len(control["wheels"]), data=data)
     name = data.get("name", Path(source).stem)
     desc = data.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):

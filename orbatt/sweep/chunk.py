@@ -28,6 +28,8 @@ from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potenti
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
                                      parameter_units)
 from .sampling import nominal_rates
+from ..scenario.paths import coordinate_name
+from .case_groups import path_groups
 from .study import STUDY_OUTPUTS, study_outputs, target_pointing_error
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
@@ -280,7 +282,8 @@ def compute_chunk(sc, spec, job, units):
     for k, name in enumerate(INERTIA_PARAMETERS):
         if name in values:
             inertia[:, k] = values[name]
-    vary_inertia = any(k in spec.parameters for k in INERTIA_PARAMETERS)
+    vary_inertia = any(k in spec.parameters for k in INERTIA_PARAMETERS) and not spec.paths
+    all_bodies = None
     if vary_inertia:
 
         iu = sc.body.inertia_unit
@@ -298,10 +301,11 @@ def compute_chunk(sc, spec, job, units):
                 np.full((n, nw), -1, dtype=np.int8) if o == "wheel_saturated" else np.full(n, np.nan))
     stats = {}
     pieces = []
-    for orbit, potential, idx in orbit_groups(sc, spec, values, n):
-        q0, Q0 = initial_states(sc, spec, values, axis, inertia, orbit, idx)
-        bodies = [all_bodies[e] for e in idx] if vary_inertia else [sc.body]
-        tr, q, Q, bad, st = propagate_group(sc, bodies, q0, Q0, potential)
+    for group_sc, idx, bodies, q0, Q0 in _groups(sc, spec, values, axis, inertia, n, all_bodies if vary_inertia
+                                                 else None):
+        orbit, potential = group_sc.orbit, group_sc.potential
+        inertia[idx] = [b.inertia_value for b in bodies] if len(bodies) == idx.size else inertia[idx]
+        tr, q, Q, bad, st = propagate_group(group_sc, bodies, q0, Q0, potential)
         add_stats(stats, st)
         res["failed"][idx] = bad
         res["q_initial"][idx], res["Q_initial"][idx] = q0, Q0
@@ -331,6 +335,27 @@ def compute_chunk(sc, spec, job, units):
             pieces.append(piece)
 
     return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
+
+
+class _Group:
+    """The part of a :class:`~orbatt.scenario.Scenario` a group of cases shares: the nominal
+    scenario with another orbit and potential (named parameters vary the orbit)."""
+
+    def __init__(self, sc, orbit, potential):
+        self.times, self.settings, self.method, self.body = sc.times, sc.settings, sc.method, sc.body
+        self.orbit, self.potential = orbit, potential
+
+
+def _groups(sc, spec, values, axis, inertia, n, all_bodies):
+    """``(scenario, idx, bodies, q0, Q0)`` of every group of the chunk: by their scenario paths
+    (:func:`orbatt.sweep.case_groups.path_groups`), else by orbit (named parameters)."""
+    if spec.paths:
+        yield from path_groups(sc, spec, values, n)
+        return
+    for orbit, potential, idx in orbit_groups(sc, spec, values, n):
+        q0, Q0 = initial_states(sc, spec, values, axis, inertia, orbit, idx)
+        bodies = [all_bodies[e] for e in idx] if all_bodies is not None else [sc.body]
+        yield _Group(sc, orbit, potential), idx, bodies, q0, Q0
 
 
 def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, failed, res):
@@ -379,7 +404,12 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
                               quaternion_order="w x y z")
         coords["quat_label"] = xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"})
     for name in spec.parameters:
-        coords[name] = cf_variable(("case",), values[name], units[name], f"sampled parameter: {PARAMETERS[name].long_name}")
+        if name in spec.paths:  # by its path: the coordinate named for it, the path as written
+            coords[coordinate_name(name)] = cf_variable(("case",), values[name], units[name],
+                                                        f"sampled parameter: scenario key {name}", scenario_key=name)
+        else:
+            coords[name] = cf_variable(("case",), values[name], units[name],
+                                       f"sampled parameter: {PARAMETERS[name].long_name}")
     if axis is not None:
         coords["attitude_axis"] = cf_variable(("case", "axis"), axis, "1",
                                        "axis of the initial attitude perturbation (unit vector)", frame="B")
