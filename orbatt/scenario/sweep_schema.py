@@ -22,7 +22,7 @@ from .key_docs import parse_key_docs
 
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
            "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
-           "parameter_unit", "parameter_units", "in_limits", "limits_text", "PATH_PARAMETER", "definition", "path_unit",
+           "parameter_unit", "parameter_units", "in_limits", "limits_text", "PATH_PARAMETER", "definition", "path_unit", "sweep_units",
            "FIXED_TABLES"]
 
 #: keys of the [sweep] table
@@ -122,6 +122,12 @@ def parameter_units(dimensionless):
     dimensionless scenario's inertia and rates are plain numbers, ``"1"``)."""
     table = DIMENSIONLESS_UNITS if dimensionless else DIMENSIONAL_UNITS
     return {name: table[p.kind] for name, p in PARAMETERS.items()}
+
+
+def sweep_units(spec, dimensionless):
+    """CF unit string of every parameter a sweep can vary (:func:`parameter_units`) and of each
+    path it varies (the key's unit as the file writes it; ``"1"`` for a plain number)."""
+    return {**parameter_units(dimensionless), **{k: ("1" if v is None else v) for k, v in spec.paths.items()}}
 
 
 @dataclass(frozen=True)
@@ -338,7 +344,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     if paths and "attitude_angle" in raw:
         raise ctx.error("[sweep.parameters] attitude_angle", "combines with the named parameters only; vary "
                                                              "\"initial.q[k]\" or the Euler angles by their paths")
-    units = {**parameter_units(dimensionless), **{k: ("1" if v is None else v) for k, v in paths.items()}}
+    units = sweep_units(SweepSpec(parameters={}, paths=paths), dimensionless)
     params = {}
     for name in [*(k for k in PARAMETERS if k in raw), *paths]:  # canonical order, then the paths as given
         p = definition(name)

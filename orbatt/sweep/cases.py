@@ -15,7 +15,7 @@ from ..errors import InputError, ScenarioError
 from ..scenario import load_scenario, parse
 from ..scenario.paths import toml_text
 from .case_groups import case_data, case_text
-from ..scenario.sweep_schema import parameter_units
+from ..scenario.sweep_schema import sweep_units
 from .chunk import compute_chunk
 from .sampling import SAMPLING_VERSION, draw_samples, nominal_values
 
@@ -77,7 +77,7 @@ class Sweep:
         self.cases = spec.cases
         self.nominal = nominal_values(scenario)
         dimless = scenario.spec.dimensionless
-        self.units = {**parameter_units(dimless), **{k: ("1" if v is None else v) for k, v in spec.paths.items()}}
+        self.units = sweep_units(spec, dimless)
         check = _case_check(scenario, spec) if spec.paths else None
         self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, self.units,
                                                                        check)

@@ -26,7 +26,7 @@ from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
 from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
-                                     parameter_units)
+                                     sweep_units)
 from .sampling import nominal_rates
 from ..scenario.paths import coordinate_name
 from .case_groups import path_groups
@@ -64,7 +64,7 @@ def run_chunk(job):
 
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
     sc = scenario_from_text(job["text"], job["source"])
-    ds = compute_chunk(sc, sc.spec.sweep, job, parameter_units(sc.spec.dimensionless))
+    ds = compute_chunk(sc, sc.spec.sweep, job, sweep_units(sc.spec.sweep, sc.spec.dimensionless))
     ds.attrs["sweep_chunk_seconds"] = time.perf_counter() - t0
     return ds
 

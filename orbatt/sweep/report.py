@@ -34,6 +34,8 @@ def percentile_table(ds) -> list[str]:
         v = ds[name]
         units = v.attrs.get("units", "")
         factor, label = _DISPLAY.get(units, (1.0, units))
+        if name == "max_wheel_speed" and units == "rad s^-1":  # wheels: revolutions per minute
+            factor, label = 60.0 / (2.0 * np.pi), "rpm"
         cols = [(name, np.asarray(v.values, dtype=float))] if v.dims == ("case",) else \
             [(f"{name}[{k}]", np.asarray(v.values[:, k], dtype=float)) for k in range(v.shape[1])]
         for label_k, x in cols:
