@@ -1,0 +1,212 @@
+"""What the engineering figures of a result draw (issue 26 §4): which figures a Dataset's
+content calls for (:func:`choose_figures`), and the series behind them - the pointing error
+to the control target or to the orbital frame (:func:`pointing_error`), the eclipses
+(:func:`eclipse_intervals`), the limits of the reaction wheels (:func:`wheel_limits`), the
+B-dot steady-state rate (:func:`reference_rates`) and values in the units an attitude
+engineer reads (:func:`values_in`). No matplotlib here; :mod:`orbatt.dataset.figures` draws.
+
+Every function takes a single run or an ensemble (a ``case`` dimension first): arrays keep
+the Dataset's leading dimensions, ``(..., time)``.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from astropy import units as u
+
+from .. import quaternion as qt
+from ..units import parse_unit, unit_string
+from .plots import drift_series
+
+__all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
+           "reference_rates", "values_in", "torque_terms", "conserved", "log_floor"]
+
+#: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
+FIGURES = ("pointing", "rates", "wheels", "torques", "drift")
+
+
+def _json_attr(ds, name):
+    try:
+        return json.loads(ds.attrs.get(name) or "{}")
+    except (TypeError, ValueError):
+        return {}
+
+
+def control_law(ds):
+    """The control law the run used (``potential`` attribute's ``control``, a dict with
+    ``law`` ``"pd"`` or ``"bdot"`` and its settings), or None."""
+    c = _json_attr(ds, "potential").get("control")
+    return c if isinstance(c, dict) and c.get("law") else None
+
+
+def torque_terms(ds):
+    """Names of the torque variables a run records, in the order drawn: each external term
+    (``torque_<term>``), the total ``torque``, then ``torque_control``."""
+    terms = sorted(n for n in ds.data_vars if n.startswith("torque_") and n != "torque_control")
+    return terms + [n for n in ("torque", "torque_control") if n in ds.data_vars]
+
+
+def values_in(ds, name, unit):
+    """``(values, unit label)``: variable ``name`` in ``unit`` (e.g. ``"deg/s"``), or in its own
+    unit where it cannot be converted (a dimensionless problem's ``"1"``)."""
+    src = ds[name].attrs.get("units", "1")
+    values = np.asarray(ds[name].values, dtype=np.float64)
+    try:
+        factor = parse_unit(src).to(parse_unit(unit) if isinstance(unit, str) else u.Unit(unit))
+    except (u.UnitConversionError, ValueError):
+        return values, ("dimensionless" if src in ("1", "") else unit_string(parse_unit(src)))
+    target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
+    return values * factor, unit if isinstance(unit, str) else unit_string(target)
+
+
+def pointing_error(ds):
+    """The pointing error of a run, or None where it has no pointing reference.
+
+    - PD control (``potential`` attribute): the angle to its target - the rotation angle of
+      ``q_orbital`` relative to ``target_q`` (identity by default) for ``target = "orbital"``,
+      of ``q`` relative to ``target_q`` for ``"inertial"``, and the angle between the body
+      axis ``target_axis`` and ``sun_direction`` for ``"sun"`` (needs that variable);
+    - B-dot control: None (the goal is the rate: see the ``rates`` figure);
+    - no control, with an orbit (``q_orbital``): the rotation angle of the body axes relative
+      to the orbital frame.
+
+    Returns
+    -------
+    tuple or None
+        ``(angle, title, components)``: ``angle`` (rad, ``(..., time)``), a title saying what it
+        is, and the roll, pitch, yaw of the error quaternion (rad, ``(..., time, 3)``; None for
+        a Sun-pointing error, which is one angle).
+    """
+    ctrl = control_law(ds)
+    if ctrl is not None and ctrl["law"] == "bdot":
+        return None
+    target = ctrl.get("target") if ctrl else None
+    if target == "sun":
+        if "sun_direction" not in ds:
+            return None
+        axis = np.asarray(ctrl.get("target_axis", (0.0, 0.0, 1.0)), dtype=np.float64)
+        b = qt.rotate(np.asarray(ds["q"].values), np.broadcast_to(axis, ds["q"].shape[:-1] + (3,)))
+        s = np.asarray(ds["sun_direction"].values)
+        angle = np.arctan2(np.linalg.norm(np.cross(b, s), axis=-1), np.sum(b * s, axis=-1))
+        return angle, f"angle between body axis {axis.tolist()} and the Sun (PD target)", None
+    if target == "inertial":
+        qe = qt.mul(qt.conj(np.asarray(ctrl["target_q"], dtype=np.float64)), np.asarray(ds["q"].values))
+        title = f"attitude error to the inertial target {np.round(ctrl['target_q'], 4).tolist()} (PD)"
+    elif "q_orbital" in ds:
+        q_orb = np.asarray(ds["q_orbital"].values)
+        tq = ctrl.get("target_q") if target == "orbital" else None
+        qe = q_orb if tq is None else qt.mul(qt.conj(np.asarray(tq, dtype=np.float64)), q_orb)
+        title = ("attitude error to the orbital frame target (PD)" if target == "orbital" else
+                 "attitude relative to the orbital frame (no control)")
+    else:
+        return None
+    qe = qt.normalize(qe)
+    # the rotation angle of qe, accurate at small angles: 2 atan2(|vector part|, |scalar part|)
+    angle = 2.0 * np.arctan2(np.linalg.norm(qe[..., 1:], axis=-1), np.abs(qe[..., 0]))
+    return angle, title, np.stack(qt.to_euler321(qe), axis=-1)
+
+
+def eclipse_intervals(ds, x):
+    """``[(x_start, x_end, umbra)]``: the stretches of the time axis values ``x`` where the body
+    is in the Earth's shadow (``shadow`` below 1; ``umbra``: it reaches 0). Empty without a
+    ``shadow`` variable (a run without SRP has none)."""
+    if "shadow" not in ds:
+        return []
+    s = np.asarray(ds["shadow"].values, dtype=np.float64)
+    while s.ndim > 1:  # the shadow depends on the orbit only: any member's
+        s = s[0]
+    dark = s < 1.0
+    out = []
+    k, n = 0, dark.size
+    while k < n:
+        if not dark[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < n and dark[j + 1]:
+            j += 1
+        out.append((x[max(k - 1, 0)] if k else x[k], x[j + 1] if j + 1 < n else x[j], bool(np.any(s[k:j + 1] <= 0.0))))
+        k = j + 1
+    return out
+
+
+def _scenario_spec(ds):
+    text = ds.attrs.get("scenario")
+    if not text:
+        return None
+    try:
+        from ..scenario.schema import parse
+
+        return parse(text, ds.attrs.get("title", "result"))
+    except Exception:  # noqa: BLE001 - a file of another version: no limits to draw
+        return None
+
+
+def wheel_limits(ds):
+    """``(max_speed, max_torque)``: each wheel's limits (rad/s, N m; NaN for none), from the
+    stored scenario (``scenario`` attribute), or None without one."""
+    spec = _scenario_spec(ds)
+    wheels = (spec.control or {}).get("wheels") if spec is not None else None
+    if not wheels or "wheel" not in ds.sizes or len(wheels) != ds.sizes["wheel"]:
+        return None
+    speed = [np.nan if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels]
+    torque = [np.nan if getattr(w, "max_torque_n_m", None) is None else w.max_torque_n_m for w in wheels]
+    return np.asarray(speed, dtype=np.float64), np.asarray(torque, dtype=np.float64)
+
+
+def reference_rates(ds):
+    """``[(rate rad/s, label)]``: the reference lines of the ``rates`` figure - for B-dot,
+    twice the mean motion (the rate B-dot settles to in a polar orbit); none otherwise."""
+    ctrl = control_law(ds)
+    orb = _json_attr(ds, "orbit")
+    period = orb.get("period_s")
+    if ctrl is None or ctrl["law"] != "bdot" or not period:
+        return []
+    n = 2.0 * np.pi / float(period)
+    return [(2.0 * n, "2 n: B-dot's steady state (n: mean motion)")]
+
+
+def conserved(ds):
+    """True when the run has an invariant worth a drift figure: no control, no wheels, no
+    torque but the gravity gradient, one run (not an ensemble: each case has its own
+    invariant), and :func:`orbatt.dataset.plots.drift_series` finds the
+    energy or the Jacobi integral conserved."""
+    if control_law(ds) is not None or "wheel_speed" in ds or "case" in ds.dims:
+        return False
+    if any(n not in ("torque", "torque_gravity_gradient") for n in torque_terms(ds)):
+        return False
+    first = ds.isel(case=0) if "case" in ds.dims else ds
+    return not drift_series(first)[1].startswith("energy change")
+
+
+def choose_figures(ds):
+    """The figures the content of ``ds`` calls for, in :data:`FIGURES` order.
+
+    - ``pointing``: a pointing reference (:func:`pointing_error`: a PD target, or the orbital
+      frame of an uncontrolled run with an orbit);
+    - ``rates``: always (``omega``);
+    - ``wheels``: reaction wheels (``wheel_speed``);
+    - ``torques``: any torque (``torque``, ``torque_<term>``, ``torque_control``);
+    - ``drift``: an invariant to check the integration by (:func:`conserved`).
+    """
+    out = []
+    if pointing_error(ds) is not None:
+        out.append("pointing")
+    out.append("rates")
+    if "wheel_speed" in ds:
+        out.append("wheels")
+    if torque_terms(ds):
+        out.append("torques")
+    if conserved(ds):
+        out.append("drift")
+    return tuple(out)
+
+
+def log_floor(y):
+    """``y`` with values at or below 0 raised to a floor (a tenth of the smallest positive
+    value, or 1e-18), so that a log axis draws every point; non-finite values kept."""
+    y = np.asarray(y, dtype=np.float64)
+    pos = y[np.isfinite(y) & (y > 0)]
+    floor = pos.min() / 10.0 if pos.size else 1e-18
+    return np.where(y <= 0.0, floor, y)
