@@ -354,9 +354,9 @@ def _cmd_plot(args):
     check_figure_folder(args.output, Path(args.file).stem, what="-o", figures=())  # the folder, before reading
     ds = open_dataset(src, load=True)
     if "time" not in ds.dims or "omega" not in ds.variables:
-        raise InputError(f"file: {args.file!r} holds per-case reductions, no time histories (a sweep without "
-                         "'trajectory' in [sweep] outputs); orbatt plot draws time histories: rerun the sweep with "
-                         "outputs = [\"trajectory\", ...] or plot its reductions in Python")
+        raise InputError(f"file: {args.file!r} is a sweep result of per-case reductions, no time histories; "
+                         "orbatt plot draws time histories: add \"trajectory\" to [sweep] outputs and rerun the sweep, "
+                         "or plot its reductions in Python")
     _check_variables(ds, args.file, RUN_VARIABLES, "a run result")
     for note in figure_notes(ds):
         print(f"orbatt: note: {note}", file=sys.stderr)
