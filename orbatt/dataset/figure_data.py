@@ -2,7 +2,8 @@
 content calls for (:func:`choose_figures`), and the series behind them - the pointing error
 to the control target or to the orbital frame (:func:`pointing_error`), the eclipses
 (:func:`eclipse_intervals`), the limits of the reaction wheels (:func:`wheel_limits`), the
-B-dot steady-state rate (:func:`reference_rates`) and values in the units an attitude
+B-dot steady-state rate (:func:`reference_rates`), the rate relative to the orbital frame
+(:func:`rate_to_orbital_frame`) and values in the units an attitude
 engineer reads (:func:`values_in`). No matplotlib here; :mod:`orbatt.dataset.figures` draws.
 
 Every function takes a single run or an ensemble (a ``case`` dimension first): arrays keep
@@ -20,7 +21,7 @@ from ..units import parse_unit, unit_string
 from .plots import drift_series
 
 __all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
-           "reference_rates", "values_in", "torque_terms", "conserved", "log_floor"]
+           "reference_rates", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms", "conserved", "log_floor"]
 
 #: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
 FIGURES = ("pointing", "rates", "wheels", "torques", "drift")
@@ -47,17 +48,23 @@ def torque_terms(ds):
     return terms + [n for n in ("torque", "torque_control") if n in ds.data_vars]
 
 
-def values_in(ds, name, unit):
-    """``(values, unit label)``: variable ``name`` in ``unit`` (e.g. ``"deg/s"``), or in its own
-    unit where it cannot be converted (a dimensionless problem's ``"1"``)."""
+def unit_factor(ds, name, unit):
+    """``(factor, unit label)``: the factor from variable ``name``'s stored unit to ``unit``
+    (e.g. ``"deg/s"``), or ``1`` and its own unit where it cannot be converted (a
+    dimensionless problem's ``"1"``)."""
     src = ds[name].attrs.get("units", "1")
-    values = np.asarray(ds[name].values, dtype=np.float64)
     try:
-        factor = parse_unit(src).to(parse_unit(unit) if isinstance(unit, str) else u.Unit(unit))
+        target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
+        factor = float(parse_unit(src).to(target))
     except (u.UnitConversionError, ValueError):
-        return values, ("dimensionless" if src in ("1", "") else unit_string(parse_unit(src)))
-    target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
-    return values * factor, unit if isinstance(unit, str) else unit_string(target)
+        return 1.0, ("dimensionless" if src in ("1", "") else unit_string(parse_unit(src)))
+    return factor, unit if isinstance(unit, str) else unit_string(target)
+
+
+def values_in(ds, name, unit):
+    """``(values, unit label)``: variable ``name`` in ``unit`` (:func:`unit_factor`)."""
+    factor, label = unit_factor(ds, name, unit)
+    return np.asarray(ds[name].values, dtype=np.float64) * factor, label
 
 
 def pointing_error(ds):
@@ -165,6 +172,26 @@ def reference_rates(ds):
         return []
     n = 2.0 * np.pi / float(period)
     return [(2.0 * n, "2 n: B-dot's steady state (n: mean motion)")]
+
+
+def rate_to_orbital_frame(ds):
+    """The body rate relative to the orbital frame, ``omega - omega_O`` (body components, in
+    the unit of ``omega``; ``(..., time, 3)``), for a run held on (or drifting about) the orbital
+    frame: one whose pointing reference is that frame (:func:`pointing_error`). ``omega_O`` is
+    the orbital frame's rate, the true anomaly's rate about the orbit normal ``o3``. None
+    otherwise (no orbit, B-dot, an inertial or Sun target, fewer than 3 outputs)."""
+    ctrl = control_law(ds)
+    if ctrl is not None and (ctrl["law"] != "pd" or ctrl.get("target") != "orbital"):
+        return None
+    if not {"q_orbital", "true_anomaly", "omega"} <= set(ds.variables) or ds.sizes["time"] < 3:
+        return None
+    t = np.asarray(ds["time"].values, dtype=np.float64)
+    nu = np.unwrap(np.asarray(ds["true_anomaly"].values, dtype=np.float64), axis=-1)
+    nu_dot = np.gradient(nu, t, axis=-1)
+    q_orb = np.asarray(ds["q_orbital"].values, dtype=np.float64)
+    w_orb = np.zeros(q_orb.shape[:-1] + (3,))
+    w_orb[..., 2] = np.broadcast_to(nu_dot, q_orb.shape[:-1])
+    return np.asarray(ds["omega"].values, dtype=np.float64) - qt.rotate_inv(q_orb, w_orb)
 
 
 def conserved(ds):

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure_data import (FIGURES, eclipse_intervals, log_floor, pointing_error, reference_rates, torque_terms,
-                          values_in, wheel_limits)
+from .figure_data import (FIGURES, eclipse_intervals, log_floor, pointing_error, rate_to_orbital_frame,
+                          reference_rates, torque_terms, unit_factor, values_in, wheel_limits)
 from .plots import plot_drift, time_axis
 
 __all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "draw", "plot_pointing", "plot_rates", "plot_wheels", "plot_torques"]
@@ -165,6 +165,11 @@ def plot_rates(ds, fig=None, time="auto", threshold=None):
     fig, axes = _new(fig, panels, (10, 3.2 + 2.6 * (panels - 1)))
     x, xlabel = time_axis(ds, time)
     note = _series(axes[0], x, mag, label="|omega|", color="black", lw=1.4)
+    rel = rate_to_orbital_frame(ds)
+    if rel is not None:
+        rel = np.linalg.norm(rel, axis=-1) * unit_factor(ds, "omega", "degree s^-1")[0]
+        _series(axes[0], x, rel, label="|omega| relative to the orbital frame", color="tab:purple", lw=1.0)
+        mag = np.concatenate([np.ravel(mag), np.ravel(rel)])
     pos = mag[np.isfinite(mag) & (mag > 0)]
     log = pos.size > 0 and pos.max() > 100.0 * pos.min()
     refs = [(r, lab) for r, lab in reference_rates(ds)]

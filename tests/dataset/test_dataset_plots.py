@@ -196,6 +196,12 @@ def test_pointing_is_the_error_to_the_target_on_a_log_axis(wheels, eccentric):
     assert [line.get_label() for line in bottom.get_lines()] == ["roll", "pitch", "yaw"]
     assert bottom.get_ylabel() == "error angle [deg]" and fig.axes[-1].get_xlabel() == "time [orbits]"
     assert _close(fig)
+    # the rate relative to the orbital frame falls as the PD law catches the frame (0.6 -> 0.002 deg/s)
+    fig = F.plot_rates(wheels)
+    mag, rel = fig.axes[0].get_lines()
+    assert rel.get_label() == "|omega| relative to the orbital frame"
+    assert rel.get_ydata()[-1] < 0.01 < 0.05 < mag.get_ydata()[-1]  # |omega| -> the orbital rate, 0.063 deg/s
+    assert _close(fig)
     assert "relative to the orbital frame (no control)" in pointing_error(eccentric)[1]
 
 
@@ -258,7 +264,8 @@ def test_ensemble_draws_every_case(ensemble, monkeypatch):
     monkeypatch.setattr(F, "ENSEMBLE_LINES", 2)  # more cases than lines: median and bands, said so
     fig = F.plot_rates(ensemble)
     ax = fig.axes[0]
-    assert len(ax.collections) == 2 and "median" in ax.get_title()
+    # |omega| and the rate relative to the orbital frame: a median line and two bands each
+    assert len(ax.collections) == 4 and len(ax.get_lines()) == 2 and "median" in ax.get_title()
     assert _close(fig)
     with pytest.raises(ValueError, match="own invariant"):
         F.draw(ensemble, "drift")
