@@ -2,7 +2,7 @@
 content calls for (:func:`choose_figures`), and the series behind them - the pointing error
 to the control target or to the orbital frame (:func:`pointing_error`), the eclipses
 (:func:`eclipse_intervals`), the limits of the reaction wheels (:func:`wheel_limits`), the
-B-dot steady-state rate (:func:`reference_rates`), the rate relative to the orbital frame
+detumble threshold and B-dot steady-state rate (:func:`reference_rates`, :func:`thresholds`), the rate relative to the orbital frame
 (:func:`rate_to_orbital_frame`) and values in the units an attitude
 engineer reads (:func:`values_in`). No matplotlib here; :mod:`orbatt.dataset.figures` draws.
 
@@ -21,7 +21,7 @@ from ..units import parse_unit, unit_string
 from .plots import drift_series
 
 __all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
-           "reference_rates", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms", "conserved", "log_floor"]
+           "reference_rates", "thresholds", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms", "conserved", "log_floor"]
 
 #: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
 FIGURES = ("pointing", "rates", "wheels", "torques", "drift")
@@ -162,16 +162,29 @@ def wheel_limits(ds):
     return np.asarray(speed, dtype=np.float64), np.asarray(torque, dtype=np.float64)
 
 
+def thresholds(ds):
+    """The study thresholds of the stored scenario's ``[sweep]`` table: ``{"detumble_rate":
+    rad/s (plain in normalized units) or None, "settling_angle": rad or None}``."""
+    spec = _scenario_spec(ds)
+    sweep = getattr(spec, "sweep", None) if spec is not None else None
+    return {"detumble_rate": getattr(sweep, "detumble_rate", None),
+            "settling_angle": getattr(sweep, "settling_angle", None)}
+
+
 def reference_rates(ds):
-    """``[(rate rad/s, label)]``: the reference lines of the ``rates`` figure - for B-dot,
-    twice the mean motion (the rate B-dot settles to in a polar orbit); none otherwise."""
+    """``[(rate, label)]``: the reference lines of the ``rates`` figure (rad/s, or the plain
+    rate of a normalized scenario) - the detumble threshold (``[sweep] detumble_rate``) where
+    the scenario has one and, for B-dot, twice the mean motion (the rate B-dot settles to in a
+    polar orbit)."""
+    out = []
+    rate = thresholds(ds)["detumble_rate"]
+    if rate is not None:
+        out.append((float(rate), "detumble threshold ([sweep] detumble_rate)"))
     ctrl = control_law(ds)
-    orb = _json_attr(ds, "orbit")
-    period = orb.get("period_s")
-    if ctrl is None or ctrl["law"] != "bdot" or not period:
-        return []
-    n = 2.0 * np.pi / float(period)
-    return [(2.0 * n, "2 n: B-dot's steady state (n: mean motion)")]
+    period = _json_attr(ds, "orbit").get("period_s")
+    if ctrl is not None and ctrl["law"] == "bdot" and period:
+        out.append((2.0 * 2.0 * np.pi / float(period), "2 n: B-dot's steady state (n: mean motion)"))
+    return out
 
 
 def rate_to_orbital_frame(ds):

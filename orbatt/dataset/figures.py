@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .figure_data import (FIGURES, eclipse_intervals, log_floor, pointing_error, rate_to_orbital_frame,
-                          reference_rates, torque_terms, unit_factor, values_in, wheel_limits)
+                          reference_rates, thresholds, torque_terms, unit_factor, values_in, wheel_limits)
 from .plots import plot_drift, time_axis
 
 __all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "draw", "plot_pointing", "plot_rates", "plot_wheels", "plot_torques"]
@@ -103,7 +103,7 @@ def _log_view(ax):
 
 def plot_pointing(ds, fig=None, time="auto"):
     """The pointing error (:func:`orbatt.dataset.figure_data.pointing_error`) on a log axis in
-    degrees, and below it (one run, not Sun pointing, an error within
+    degrees with the scenario's ``[sweep] settling_angle`` where it has one, and below it (one run, not Sun pointing, an error within
     :data:`EULER_PANEL_MAX_DEG`) the roll, pitch and yaw of the error.
 
     Parameters
@@ -127,6 +127,10 @@ def plot_pointing(ds, fig=None, time="auto"):
     fig, axes = _new(fig, panels, (10, 3.2 + 2.6 * (panels - 1)))
     x, xlabel = time_axis(ds, time)
     note = _series(axes[0], x, np.degrees(angle), label="pointing error", color="tab:blue", log=True)
+    settle = thresholds(ds)["settling_angle"]
+    if settle is not None:
+        axes[0].axhline(np.degrees(settle), color="tab:red", ls="--", lw=1.0,
+                        label=f"settling threshold ([sweep] settling_angle) = {np.degrees(settle):.3g} deg")
     axes[0].set_yscale("log")
     _log_view(axes[0])
     axes[0].set_ylabel("pointing error [deg]")
@@ -142,9 +146,10 @@ def plot_pointing(ds, fig=None, time="auto"):
 
 
 def plot_rates(ds, fig=None, time="auto", threshold=None):
-    """The body rate: ``|omega|`` (log axis where it spans more than two decades) and, for one
-    run, its body components, in deg/s; B-dot runs also show twice the mean motion (its steady
-    state).
+    """The body rate: ``|omega|`` (log axis where it spans more than two decades), the rate
+    relative to the orbital frame (runs held on it) and, for one run, the body components, in
+    deg/s; dashed: the detumble threshold (``[sweep] detumble_rate`` or ``threshold``) and, for
+    B-dot, twice the mean motion (its steady state).
 
     Parameters
     ----------
@@ -152,7 +157,8 @@ def plot_rates(ds, fig=None, time="auto", threshold=None):
     fig : matplotlib.figure.Figure, optional
     time : {"auto", "utc", "orbits", "time"}
     threshold : astropy.units.Quantity, optional
-        A detumble threshold (an angular velocity) drawn as a dashed line.
+        A detumble threshold (an angular velocity) drawn as a dashed line; the scenario's
+        ``[sweep] detumble_rate`` is drawn without it.
 
     Returns
     -------
@@ -172,9 +178,9 @@ def plot_rates(ds, fig=None, time="auto", threshold=None):
         mag = np.concatenate([np.ravel(mag), np.ravel(rel)])
     pos = mag[np.isfinite(mag) & (mag > 0)]
     log = pos.size > 0 and pos.max() > 100.0 * pos.min()
-    refs = [(r, lab) for r, lab in reference_rates(ds)]
+    refs = reference_rates(ds)
     if threshold is not None:
-        refs.append((float(threshold.to_value("rad/s")), f"detumble threshold {threshold:.3g}"))
+        refs.insert(0, (float(threshold.to_value("rad/s")), "detumble threshold"))
     for k, (r, lab) in enumerate(refs):
         value = np.degrees(r) if unit_label == "deg/s" else r
         axes[0].axhline(value, color=_COLORS[3 + k], ls="--", lw=1.0, label=f"{lab} = {value:.3g} {unit_label}")

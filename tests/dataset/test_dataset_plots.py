@@ -214,8 +214,13 @@ def test_rates_in_deg_per_s_with_bdot_steady_state(bdot, free):
     mag, *refs = top.get_lines()
     np.testing.assert_allclose(mag.get_ydata()[0], np.degrees(np.linalg.norm(bdot["omega"].values[0])))
     labels = [r.get_label() for r in refs]
-    assert labels[0].startswith("2 n: B-dot's steady state") and labels[1].startswith("detumble threshold")
+    assert labels[0] == "detumble threshold = 0.5 deg/s" and labels[1].startswith("2 n: B-dot's steady state")
     assert len(comps.get_lines()) == 3
+    assert _close(fig)
+    # a scenario with a detumble threshold of its own ([sweep] detumble_rate): drawn without asking
+    mc = _run("cubesat-detumble-montecarlo", '"120 s"')
+    fig = F.plot_rates(mc)
+    assert fig.axes[0].get_lines()[1].get_label() == "detumble threshold ([sweep] detumble_rate) = 0.5 deg/s"
     assert _close(fig)
     fig = F.plot_rates(free)  # a dimensionless problem keeps its units
     assert fig.axes[0].get_ylabel() == "|omega| [dimensionless]"
