@@ -2,9 +2,9 @@
 content calls for (:func:`choose_figures`), and the series behind them - the pointing error
 to the control target or to the orbital frame (:func:`pointing_error`), the eclipses
 (:func:`eclipse_intervals`), the limits of the reaction wheels (:func:`wheel_limits`), the
-detumble threshold and B-dot steady-state rate (:func:`reference_rates`, :func:`thresholds`), the rate relative to the orbital frame
-(:func:`rate_to_orbital_frame`) and values in the units an attitude
-engineer reads (:func:`values_in`). No matplotlib here; :mod:`orbatt.dataset.figures` draws.
+detumble threshold and B-dot steady-state rate (:func:`reference_rates`, :func:`thresholds`),
+the rate relative to the orbital frame (:func:`rate_to_orbital_frame`) and values in the units
+an attitude engineer reads (:func:`values_in`). No matplotlib here; :mod:`orbatt.dataset.figures` draws.
 
 Every function takes a single run or an ensemble (a ``case`` dimension first): arrays keep
 the Dataset's leading dimensions, ``(..., time)``.
@@ -21,7 +21,8 @@ from ..units import parse_unit, unit_string
 from .plots import drift_series
 
 __all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
-           "reference_rates", "thresholds", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms", "conserved", "log_floor"]
+           "reference_rates", "thresholds", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms",
+           "conserved", "log_floor"]
 
 #: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
 FIGURES = ("pointing", "rates", "wheels", "torques", "drift")

@@ -16,10 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from .figure_data import (FIGURES, eclipse_intervals, log_floor, pointing_error, rate_to_orbital_frame,
-                          reference_rates, thresholds, torque_terms, unit_factor, values_in, wheel_limits)
+                          reference_rates, thresholds, torque_terms, unit_factor, values_in,
+                          wheel_limits)
 from .plots import plot_drift, time_axis
 
-__all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "draw", "plot_pointing", "plot_rates", "plot_wheels", "plot_torques"]
+__all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "draw", "plot_pointing", "plot_rates",
+           "plot_wheels", "plot_torques"]
 
 #: an ensemble with more cases than this is drawn as a median and bands instead of a line per case
 ENSEMBLE_LINES = 200
@@ -31,6 +33,8 @@ EULER_PANEL_MAX_DEG = 90.0
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive")
 _AXES = ("x", "y", "z")
+_TORQUE_LABELS = {"torque": "total external", "torque_control": "control"}
+_TORQUE_STYLES = {"torque": ("black", 1.6), "torque_control": ("tab:red", 1.2)}
 
 
 def _new(fig, rows, figsize):
@@ -86,7 +90,7 @@ def _finish(fig, axes, ds, x, xlabel, title):
             ax.legend(loc="best", fontsize="small", framealpha=0.8)
     axes[-1].set_xlabel(xlabel)
     name = str(ds.attrs.get("title", "")).removeprefix("orbatt: ")
-    fig.suptitle(f"{name}: {title}" + (" (grey: eclipse)" if shaded else "") if name else title)
+    fig.suptitle((f"{name}: {title}" if name else title) + (" (grey: eclipse)" if shaded else ""))
     if np.issubdtype(np.asarray(x).dtype, np.datetime64):
         fig.autofmt_xdate()
     fig.tight_layout()
@@ -103,8 +107,9 @@ def _log_view(ax):
 
 def plot_pointing(ds, fig=None, time="auto"):
     """The pointing error (:func:`orbatt.dataset.figure_data.pointing_error`) on a log axis in
-    degrees with the scenario's ``[sweep] settling_angle`` where it has one, and below it (one run, not Sun pointing, an error within
-    :data:`EULER_PANEL_MAX_DEG`) the roll, pitch and yaw of the error.
+    degrees, with the scenario's ``[sweep] settling_angle`` where it has one; below it (one
+    run, not Sun pointing, an error within :data:`EULER_PANEL_MAX_DEG`) the roll, pitch and yaw
+    of the error.
 
     Parameters
     ----------
@@ -223,7 +228,8 @@ def plot_wheels(ds, fig=None, time="auto"):
             lim = limits[0] * 60.0 / (2.0 * np.pi) if name == "wheel_speed" else limits[1]
             if shown == unit:
                 for value in sorted(set(np.round(lim[np.isfinite(lim)], 12))):
-                    ax.axhline(value, color="0.2", ls="--", lw=1.0, label=f"max_{what.split()[-1]} = +-{value:.4g} {unit}")
+                    ax.axhline(value, color="0.2", ls="--", lw=1.0,
+                               label=f"max_{what.split()[-1]} = +-{value:.4g} {unit}")
                     ax.axhline(-value, color="0.2", ls="--", lw=1.0)
     if notes and notes[0]:
         axes[0].set_title(axes[0].get_title() + f"; {notes[0]}", fontsize="medium")
@@ -260,14 +266,14 @@ def plot_torques(ds, fig=None, time="auto"):
     notes = []
     for k, name in enumerate(terms):
         v, unit = values_in(ds, name, "N m")
-        label = {"torque": "total external", "torque_control": "control"}.get(name, name[len("torque_"):].replace("_", " "))
-        style = {"torque": ("black", 1.6), "torque_control": ("tab:red", 1.2)}.get(name, (_COLORS[k % 3 if k < 3 else k], 1.0))
-        notes.append(_series(axes[0], x, np.linalg.norm(v, axis=-1), label=label, color=style[0], lw=style[1], log=True))
+        label = _TORQUE_LABELS.get(name, name[len("torque_"):].replace("_", " "))
+        color, lw = _TORQUE_STYLES.get(name, (_COLORS[k % len(_COLORS)], 1.0))
+        notes.append(_series(axes[0], x, np.linalg.norm(v, axis=-1), label=label, color=color, lw=lw, log=True))
     axes[0].set_yscale("log")
     _log_view(axes[0])
     axes[0].set_ylabel(f"|torque| [{unit}]" if terms else "|torque|")
-    axes[0].set_title("torque budget: magnitude of each term (body frame)" + (f"; {notes[0]}" if notes and notes[0] else ""),
-                      fontsize="medium")
+    note = f"; {notes[0]}" if notes and notes[0] else ""
+    axes[0].set_title(f"torque budget: magnitude of each term (body frame){note}", fontsize="medium")
     if dipole:
         m, unit = values_in(ds, "dipole_control", "A m^2")
         for k in range(3):
