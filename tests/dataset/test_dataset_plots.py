@@ -336,6 +336,14 @@ def test_plot_o_existing_file_and_unwritable_folders(free, tmp_path, capsys, mon
     assert not (tmp_path / "long.nc").exists()
 
 
+def test_plot_of_an_ensemble_file_draws_every_case(ensemble, tmp_path, capsys, monkeypatch):
+    ensemble.orbatt.to_netcdf(tmp_path / "ens.nc")
+    monkeypatch.chdir(tmp_path)
+    assert main(["plot", "ens.nc", "-o", "figs"]) == 0
+    assert _png_names(tmp_path / "figs") == ["ens-pointing.png", "ens-rates.png", "ens-torques.png"]
+    assert all(is_orbatt_figure(p) for p in (tmp_path / "figs").iterdir())
+
+
 def test_sweep_without_histories_says_why(tmp_path, capsys, monkeypatch):
     import xarray as xr
 
