@@ -63,9 +63,12 @@ def test_run_plot_and_plot_command(tmp_path):
     r = cli("run", path, "-o", tmp_path / "tf.nc", "--plot", tmp_path / "figs")
     assert r.returncode == 0, r.stderr
     assert "energy" in r.stdout
-    assert len(list((tmp_path / "figs").glob("*.png"))) == 3
+    # torque-free, no orbit: the body rate and the drift of the invariants (issue 26 item 4)
+    assert sorted(p.name for p in (tmp_path / "figs").glob("*.png")) == ["paper-torque-free-drift.png",
+                                                                         "paper-torque-free-rates.png"]
     r = cli("plot", tmp_path / "tf.nc", "-o", tmp_path / "figs2")
     assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (tmp_path / "figs2").glob("*.png")) == ["tf-drift.png", "tf-rates.png"]
     assert all(p.stat().st_size > 10_000 for p in (tmp_path / "figs2").glob("*.png"))
 
 
