@@ -1,0 +1,191 @@
+"""Propagating a binary: the coupled orbit and attitudes (:mod:`orbatt.core.mutual`) with the
+one adaptive step loop of :mod:`orbatt.core.dop853` (its coupled form), impulses applied
+between segments, and a stop at contact.
+
+Output times are landed on exactly (step-end values, no interpolation). An impulse at time
+``t_k`` changes the secondary's velocity relative to the primary by ``delta_v`` (radial,
+along-track, normal components in the orbital frame of the state at ``t_k``): ``p += mu
+delta_v``; an output at ``t_k`` holds the state **before** the impulse. After an impulse the
+step loop restarts (new derivative, Hairer's initial step), as the right-hand side jumps there.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import dop853 as kd
+from ..core import model as kmod
+from ..errors import InputError, IntegrationError
+from .system import BinarySystem, rtn_basis
+
+__all__ = ["BinaryTrajectory", "propagate_binary", "METHODS", "Impulse"]
+
+#: the methods of a coupled binary: the step loops of :mod:`orbatt.core.dop853`
+METHODS = {"dop853": kd.advance_coupled, "vern98": kd.advance_coupled_verner98}
+#: outputs per call of the step loop: the separation is checked between calls
+_CHUNK = 512
+
+
+@dataclass(frozen=True)
+class Impulse:
+    """A velocity change of the secondary at ``time`` (s): ``delta_v`` (km/s) in the radial,
+    along-track and normal directions of the relative orbit at that instant."""
+
+    time: float
+    delta_v: tuple
+
+
+@dataclass
+class BinaryTrajectory:
+    """What :func:`propagate_binary` returns (plain floats, kg km s).
+
+    Attributes
+    ----------
+    system : BinarySystem
+    t : ndarray (N,)
+        Output times (s).
+    y : ndarray (N, 14 | 22)
+        States (:mod:`orbatt.core.mutual`) at ``t``.
+    c : ndarray
+        The kernel constants used.
+    method : str
+    settings : dict
+        ``rtol``, ``atol``, ``impulses``.
+    stats : dict
+        ``steps``, ``rejected_steps``, ``rhs_evaluations``, ``wall_time_s``.
+    complete : bool
+        False when the run stopped early (contact, failure): ``t, y`` hold what was computed.
+    """
+
+    system: BinarySystem
+    t: np.ndarray
+    y: np.ndarray
+    c: np.ndarray
+    method: str
+    settings: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+    complete: bool = True
+
+
+def apply_impulse(y, c, delta_v):
+    """``y`` after the secondary's velocity change ``delta_v`` (radial, along-track, normal,
+    km/s): ``p += mu delta_v`` (inertial)."""
+    from ..core.mutual import C_MU
+
+    y = y.copy()
+    mu = c[C_MU]
+    basis = rtn_basis(y[0:3], y[3:6] / mu)
+    y[3:6] += mu * (np.asarray(delta_v, dtype=np.float64) @ basis)
+    return y
+
+
+def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-12, impulses=(), max_steps=10**8):
+    """Integrate the coupled binary from ``y0`` at ``times[0]`` to every time of ``times``.
+
+    Parameters
+    ----------
+    system : BinarySystem
+    y0 : ndarray (14 | 22,)
+        :meth:`BinarySystem.state`.
+    times : array_like (N,)
+        Increasing output times (s); ``times[0]`` is the time of ``y0``.
+    method : {"dop853", "vern98"}
+    rtol, atol : float
+        Tolerances: ``atol`` bounds the error of ``q``, ``q1``, of ``Q / max(I)``, of ``r`` in
+        units of the initial separation and of ``p`` in units of ``mu`` times the circular speed.
+    impulses : sequence of Impulse
+    max_steps : int
+
+    Returns
+    -------
+    BinaryTrajectory
+
+    Raises
+    ------
+    IntegrationError
+        The bodies touched (separation below :attr:`BinarySystem.contact_distance` at an output
+        time) or the step loop failed; ``exc.trajectory`` holds the outputs computed until then.
+    """
+    if method not in METHODS:
+        raise InputError(f"method: {method!r} is not one of {', '.join(map(repr, METHODS))} for a coupled binary")
+    loop = METHODS[method]
+    times = np.asarray(times, dtype=np.float64)
+    if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
+        raise InputError("times: give increasing output times")
+    imps = sorted(impulses, key=lambda k: k.time)
+    for k in imps:
+        if not times[0] < k.time <= times[-1]:
+            raise InputError(f"impulses: time {k.time!r} s is outside the run ({times[0]:g} .. {times[-1]:g} s]")
+    y = np.array(y0, dtype=np.float64)
+    c = system.constants(y[0:3], y[3:6] / system.reduced_mass)
+    terms = np.zeros((1, kmod.TERM_FIELDS), dtype=np.int64)  # no model terms: no breakpoints
+    params = np.zeros(1)
+    table = np.zeros((1, 1))
+    work = np.zeros(1)
+    st, cnt, f0 = kd.new_state(width=y.size)
+    st[kd.ST_T] = times[0]
+    out = np.empty((times.size, y.size))
+    out[0] = y
+    done = 1
+    contact = system.contact_distance
+    wall = time.perf_counter()
+    stops = [k.time for k in imps] + [None]
+    status = kd.DONE
+    stop_reason = None
+    for k_imp, t_stop in enumerate(stops):
+        # the output times of this segment, plus the impulse time if it is not one of them
+        hi = times.size if t_stop is None else int(np.searchsorted(times, t_stop, side="right"))
+        seg = times[done:hi]
+        extra = t_stop is not None and (seg.size == 0 or seg[-1] != t_stop)
+        t_seg = np.concatenate([seg, [t_stop]]) if extra else seg
+        for j0 in range(0, t_seg.size, _CHUNK):
+            t_out = np.ascontiguousarray(t_seg[j0:j0 + _CHUNK])
+            buf = np.empty((t_out.size, y.size))
+            cnt[kd.CNT_IOUT] = 0
+            status = loop(y, st, cnt, f0, t_out, np.empty(0), buf, False, c, terms, params, table, work,
+                          rtol, atol, np.inf, max_steps, 2**62)
+            n_ok = int(cnt[kd.CNT_IOUT])
+            n_rec = min(n_ok, seg.size - j0) if extra else n_ok
+            n_rec = max(n_rec, 0)
+            sep = np.linalg.norm(buf[:n_rec, 0:3], axis=1)
+            hit = np.nonzero(sep <= contact)[0]
+            if hit.size:
+                n_rec = int(hit[0]) + 1
+                stop_reason = (f"contact at t = {t_out[hit[0]]:.9g} s: separation {sep[hit[0]]:.6g} km <= "
+                               f"{contact:.6g} km (the sum of the radii sqrt(tr I / M))")
+            out[done:done + n_rec] = buf[:n_rec]
+            done += n_rec
+            if stop_reason is None and status != kd.DONE:
+                stop_reason = f"the step loop stopped at t = {st[kd.ST_T]:.9g} s (status {status})"
+            if stop_reason is not None:
+                break
+        if stop_reason is not None:
+            break
+        if t_stop is not None:
+            y[:] = apply_impulse(y, c, imps[k_imp].delta_v)
+            cnt[kd.CNT_FLAGS] &= ~kd.FLAG_F0_VALID  # the derivative jumps: evaluate it again
+            st[kd.ST_H] = 0.0  # and choose a new first step
+            st[kd.ST_FACOLD] = 0.0
+    wall = time.perf_counter() - wall
+    stats = {"steps": int(cnt[kd.CNT_STEPS]), "rejected_steps": int(cnt[kd.CNT_REJECTED]),
+             "rhs_evaluations": int(cnt[kd.CNT_NFEV]), "wall_time_s": wall}
+    settings = {"rtol": rtol, "atol": atol,
+                "impulses": [{"time": k.time, "delta_v": list(map(float, k.delta_v))} for k in imps]}
+    traj = BinaryTrajectory(system, times[:done].copy(), out[:done].copy(), c, method, settings, stats,
+                            complete=stop_reason is None)
+    if stop_reason is not None:
+        exc = IntegrationError(f"binary: {stop_reason}", t=float(traj.t[-1]))
+        exc.trajectory = traj
+        raise exc
+    return traj
+
+
+def kepler_period(system, y):
+    """The osculating period (s) of the relative orbit of the state ``y``."""
+    r = np.linalg.norm(y[0:3])
+    v2 = float(np.sum((y[3:6] / system.reduced_mass) ** 2))
+    eps = 0.5 * v2 - system.gm / r
+    return 2.0 * math.pi * math.sqrt((-system.gm / (2.0 * eps)) ** 3 / system.gm) if eps < 0 else math.inf
