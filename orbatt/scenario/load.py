@@ -18,6 +18,8 @@ from .build import (build_initial_state, build_kepler_orbit, build_output_times,
                     build_rebound_orbit, build_tle_orbit, check_work, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
+from .binary_schema import BinarySpec
+from .binary_scenario import BinaryScenario
 from ..dataset.build import dataset_content
 from ..dataset.content import Content
 from ..propagation import propagate
@@ -49,6 +51,11 @@ class Scenario:
     settings : dict
         ``rtol``, ``atol``, ``step`` as given (step in the time unit).
     """
+
+    def __new__(cls, spec=None, path=None):
+        if isinstance(spec, BinarySpec):  # [orbit] provider = "coupled": scenario/binary_scenario.py
+            return BinaryScenario(spec, path=path)
+        return super().__new__(cls)
 
     def __init__(self, spec: Spec, path=None):
         self.spec = spec
