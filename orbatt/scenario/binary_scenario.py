@@ -74,7 +74,7 @@ class BinaryScenario:
             self.y0 = self.system.state(r * U.LENGTH, v * (U.LENGTH / U.TIME), q, omega * U.RATE, **kw)
         except InputError as exc:
             where = "[orbit] position" if "position" in o else "[orbit] a"
-            raise ctx.error(where, str(exc)) from None
+            raise ctx.error(where, str(exc).split(": ", 1)[-1]) from None
         mu = self.system.reduced_mass
         eps = 0.5 * float(np.sum((self.y0[3:6] / mu) ** 2)) - self.system.gm / float(np.linalg.norm(self.y0[0:3]))
         if not eps < 0:
