@@ -18,13 +18,17 @@ import numpy as np
 
 from ..core import dop853 as kd
 from ..core import model as kmod
+from ..core import mutual_splitting as ks
+from ..core.splitting import COMPOSITIONS
 from ..errors import InputError, IntegrationError
 from .system import BinarySystem, rtn_basis
 
 __all__ = ["BinaryTrajectory", "propagate_binary", "METHODS", "Impulse"]
 
-#: the methods of a coupled binary: the step loops of :mod:`orbatt.core.dop853`
-METHODS = {"dop853": kd.advance_coupled, "vern98": kd.advance_coupled_verner98}
+#: the methods of a coupled binary: the step loops of :mod:`orbatt.core.dop853`, and the
+#: symplectic splitting of :mod:`orbatt.core.mutual_splitting` (fixed step, a composition of
+#: :data:`orbatt.core.splitting.COMPOSITIONS`)
+METHODS = {"dop853": kd.advance_coupled, "vern98": kd.advance_coupled_verner98, "splitting": None}
 #: outputs per call of the step loop: the separation is checked between calls
 _CHUNK = 512
 
@@ -82,7 +86,8 @@ def apply_impulse(y, c, delta_v):
     return y
 
 
-def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-12, impulses=(), max_steps=10**8):
+def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-12, impulses=(), max_steps=10**8,
+                     step=None, composition="yoshida4"):
     """Integrate the coupled binary from ``y0`` at ``times[0]`` to every time of ``times``.
 
     Parameters
@@ -92,12 +97,15 @@ def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-
         :meth:`BinarySystem.state`.
     times : array_like (N,)
         Increasing output times (s); ``times[0]`` is the time of ``y0``.
-    method : {"dop853", "vern98"}
+    method : {"dop853", "vern98", "splitting"}
     rtol, atol : float
         Tolerances: ``atol`` bounds the error of ``q``, ``q1``, of ``Q / max(I)``, of ``r`` in
         units of the initial separation and of ``p`` in units of ``mu`` times the circular speed.
     impulses : sequence of Impulse
     max_steps : int
+    step, composition : float, str
+        ``"splitting"`` only: the fixed step (s; every output and impulse time must be a
+        multiple of it from ``times[0]``) and a key of :data:`orbatt.core.splitting.COMPOSITIONS`.
 
     Returns
     -------
@@ -112,6 +120,8 @@ def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-
     if method not in METHODS:
         raise InputError(f"method: {method!r} is not one of {', '.join(map(repr, METHODS))} for a coupled binary")
     loop = METHODS[method]
+    if method == "splitting":
+        return _propagate_split(system, y0, times, step, composition, impulses)
     times = np.asarray(times, dtype=np.float64)
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
         raise InputError("times: give increasing output times")
@@ -189,3 +199,68 @@ def kepler_period(system, y):
     v2 = float(np.sum((y[3:6] / system.reduced_mass) ** 2))
     eps = 0.5 * v2 - system.gm / r
     return 2.0 * math.pi * math.sqrt((-system.gm / (2.0 * eps)) ** 3 / system.gm) if eps < 0 else math.inf
+
+
+def _grid_steps(times, t0, step, what):
+    """The numbers of steps of size ``step`` between ``t0`` and each of ``times``; refuse a
+    time off the grid ``t0 + k step`` (relative 1e-9 of a step)."""
+    k = np.rint((np.asarray(times) - t0) / step)
+    if np.any(np.abs(t0 + k * step - times) > 1e-9 * step):
+        raise InputError(f"step: {step!r} s does not divide the {what} (from the start); give a step that does, "
+                         "e.g. the output step over an integer")
+    return k.astype(np.int64)
+
+
+def _propagate_split(system, y0, times, step, composition, impulses):
+    """:func:`propagate_binary` with the symplectic splitting (fixed ``step``)."""
+    if composition not in COMPOSITIONS:
+        raise InputError(f"composition: {composition!r} is not one of {', '.join(map(repr, COMPOSITIONS))}")
+    if step is None or not float(step) > 0:
+        raise InputError(f"step: {step!r}; the splitting method needs a positive fixed step (s)")
+    step = float(step)
+    times = np.asarray(times, dtype=np.float64)
+    if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
+        raise InputError("times: give increasing output times")
+    imps = sorted(impulses, key=lambda k: k.time)
+    k_out = _grid_steps(times, times[0], step, "output times")
+    k_imp = _grid_steps([k.time for k in imps], times[0], step, "impulse times") if imps else np.zeros(0, np.int64)
+    y = np.array(y0, dtype=np.float64)
+    c = system.constants(y[0:3], y[3:6] / system.reduced_mass)
+    gammas = np.array(COMPOSITIONS[composition][1])
+    i2 = np.asarray(system.inertia, dtype=np.float64)
+    i1 = np.asarray(system.primary_inertia if system.rigid_primary else np.ones(3), dtype=np.float64)
+    out = np.empty((times.size, y.size))
+    out[0] = y
+    # segments: outputs up to and including each impulse's grid point, the impulse, and on
+    wall = time.perf_counter()
+    evals = 0
+    done, k_now = 1, 0
+    for j, k_stop in enumerate(list(k_imp) + [None]):
+        hi = times.size if k_stop is None else int(np.searchsorted(k_out, k_stop, side="right"))
+        ks_seg = k_out[done:hi]
+        extra = k_stop is not None and (ks_seg.size == 0 or ks_seg[-1] != k_stop)
+        targets = np.concatenate([ks_seg, [k_stop]]) if extra else ks_seg
+        n_steps = np.diff(np.concatenate([[k_now], targets])).astype(np.int64)
+        buf = np.empty((targets.size, y.size))
+        evals += ks.advance_split(y, c, i2, i1, gammas, step, n_steps, buf)
+        out[done:done + ks_seg.size] = buf[:ks_seg.size]
+        done += ks_seg.size
+        k_now = int(targets[-1]) if targets.size else k_now
+        if k_stop is not None:
+            y[:] = apply_impulse(y, c, imps[j].delta_v)
+    wall = time.perf_counter() - wall
+    stats = {"steps": int(k_out[-1]), "gradient_evaluations": int(evals), "wall_time_s": wall}
+    settings = {"step": step, "composition": composition,
+                "impulses": [{"time": k.time, "delta_v": list(map(float, k.delta_v))} for k in imps]}
+    sep = np.linalg.norm(out[:, 0:3], axis=1)
+    hit = np.nonzero(sep <= system.contact_distance)[0]
+    n = int(hit[0]) + 1 if hit.size else times.size
+    traj = BinaryTrajectory(system, times[:n].copy(), out[:n].copy(), c, "splitting", settings, stats,
+                            complete=not hit.size)
+    if hit.size:
+        exc = IntegrationError(f"binary: contact at t = {times[hit[0]]:.9g} s: separation {sep[hit[0]]:.6g} km <= "
+                               f"{system.contact_distance:.6g} km (the sum of the radii sqrt(tr I / M))",
+                               t=float(times[hit[0]]))
+        exc.trajectory = traj
+        raise exc
+    return traj
