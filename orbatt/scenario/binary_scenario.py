@@ -88,7 +88,10 @@ class BinaryScenario:
                 raise ctx.error(f"[[orbit.impulses]] {j} time", f"{k.time:g} s is after the last output "
                                                                f"({self.times[-1]:g} s); move it or lengthen t_end")
         self.method = spec.integration["method"]
-        self.settings = {k: spec.integration[k] for k in ("rtol", "atol") if k in spec.integration}
+        self.settings = {k: spec.integration[k] for k in ("rtol", "atol", "composition") if k in spec.integration}
+        if "step" in spec.integration:
+            kind, value = spec.integration["step"]
+            self.settings["step"] = value * self.period if kind == "orbits" else value
 
     def run(self, method=None, progress=False, **overrides):
         """Propagate and return the result :class:`xarray.Dataset` (:mod:`orbatt.binary.dataset`).
@@ -104,10 +107,13 @@ class BinaryScenario:
     def run_content(self, method=None, progress=False, **overrides):
         """:meth:`run`'s result as a :class:`~orbatt.dataset.content.Content` (``progress`` is
         accepted for the command line's sake; a binary run reports none)."""
-        kw = {"rtol": 1e-10, "atol": 1e-12}
+        m = method or self.method
+        kw = {} if m == "splitting" else {"rtol": 1e-10, "atol": 1e-12}
         kw.update(self.settings)
         kw.update(overrides)
-        m = method or self.method
+        if m != "splitting":  # the splitting's settings do not apply to the adaptive methods
+            kw.pop("step", None)
+            kw.pop("composition", None)
         try:
             traj = propagate_binary(self.system, self.y0, self.times, method=m, impulses=self.impulses, **kw)
         except InputError as exc:

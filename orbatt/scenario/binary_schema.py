@@ -16,8 +16,10 @@ not listed are refused; quantities carry units, dimensional scenarios only)::
                   [[orbit.impulses]] time, delta_v = [radial, along-track, normal]
     [primary]     optional (else a point mass): inertia (required), q (body -> inertial,
                   default identity), omega (body rates, default 0)
-    [integration] method = "dop853" (default) | "vern98", rtol, atol, t_end, output_step
-                  ("N orbits": the initial osculating period)
+    [integration] method = "dop853" (default) | "vern98" | "splitting", rtol, atol, t_end,
+                  output_step ("N orbits": the initial osculating period); splitting: step
+                  (dividing output_step and the impulse times), composition = "strang" |
+                  "yoshida4" (default) | "suzuki4" | "mclachlan4" | "yoshida6" | "kahanli6"
 
 Refused with a coupled orbit (until asked for): [torques], [environment], [control], [sweep],
 [[body.facets]], [[body.wheels]]. ``[primary]`` without ``provider = "coupled"`` is refused.
@@ -43,9 +45,9 @@ BINARY_TABLES = {
     "orbit": {"provider", "primary_mass", "a", "e", "i", "raan", "argp", "true_anomaly", "position", "velocity",
               "impulses"},
     "primary": {"inertia", "q", "omega"},
-    "integration": {"method", "rtol", "atol", "t_end", "output_step"},
+    "integration": {"method", "rtol", "atol", "t_end", "output_step", "step", "composition"},
 }
-BINARY_METHODS = ("dop853", "vern98")
+BINARY_METHODS = ("dop853", "vern98", "splitting")
 BINARY_POTENTIALS = ("coupled", "gravity-gradient")
 _ELEMENTS = ("a", "e", "i", "raan", "argp", "true_anomaly")
 
@@ -183,6 +185,19 @@ def parse_binary(ctx, data, text, source):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v <= 0.1 and math.isfinite(v)):
                 raise ctx.error(f"[integration] {k}", f"{v!r} must be a number in (0, 0.1], e.g. {k} = 1e-12")
             integ[k] = float(v)
+    if integ["method"] == "splitting":
+        from ..core.splitting import COMPOSITIONS
+
+        if "step" not in g:
+            raise ctx.error("[integration] step", "missing; method = 'splitting' needs a fixed step that divides "
+                                                  "output_step, e.g. step = '0.01 orbits'")
+        integ["step"] = parse_time(ctx, "[integration] step", g["step"], False, orb)
+        integ["composition"] = parse_choice(ctx, "[integration] composition", g.get("composition", "yoshida4"),
+                                            tuple(COMPOSITIONS))
+    else:
+        for k in ("step", "composition"):
+            if k in g:
+                raise ctx.error(f"[integration] {k}", "only used by method = 'splitting'; remove it")
     for k in ("t_end", "output_step"):
         if k not in g:
             raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")

@@ -168,3 +168,14 @@ def test_cli_exit_codes(tmp_path):
     r = cli("run", plunge, "-o", tmp_path / "plunge.nc", "--quiet")
     assert r.returncode == 1 and "contact" in r.stderr, r.stderr
     assert orbatt.open_dataset(tmp_path / "plunge.nc").attrs["integration_complete"] == 0
+
+
+def test_splitting_from_the_scenario():
+    text = edit(EQ, 'method = "dop853"\nrtol = 1e-13\natol = 1e-18\n',
+                'method = "splitting"\nstep = "0.01 orbits"\ncomposition = "yoshida6"\n')
+    ds = BinaryScenario(parse(text, "eq.toml")).run()
+    assert np.max(np.abs(ds.separation.values - 1.19)) < 1e-8   # h = T/100: the splitting's equilibrium is ~7e-9 off
+    L = ds.angular_momentum_total.values
+    assert np.max(np.abs(L - L[0])) < 1e-13 * np.linalg.norm(L[0])
+    with pytest.raises(ScenarioError, match=r"\[integration\] step: missing"):
+        parse(edit(text, 'step = "0.01 orbits"\n', ""), "eq.toml")
