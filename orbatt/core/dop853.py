@@ -32,10 +32,8 @@ FSAL (the first stage of the next step is evaluated on acceptance, as DOP853's F
 error ``err = |h| sqrt(e / n)``, ``e = sum(((E . K)_i / sk_i)^2)`` with ``E = b - bhat``, and
 the same controller with ``err^(1/9)`` (:func:`controller9`). On the Keplerian benchmark it needs
 ~17 % fewer right-hand-side evaluations than DOP853 at 1e-9 rad, ~9 % fewer at 1e-6 rad, and
-~10 % more on the torque-free body (``benchmarks/verner98.py``).
-
-A binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`) run in the same loop
-(:data:`advance_coupled`, :data:`advance_coupled_verner98`).
+~10 % more on the torque-free body (``benchmarks/verner98.py``). A binary's coupled orbit and
+attitudes (:mod:`orbatt.core.mutual`) run in the same loop (:data:`advance_coupled`, ``_verner98``).
 
 Breakpoints: steps also land on the knots of the model's tables, a sampled orbit's samples and
 the environment tables (:func:`orbatt.core.model.next_breakpoint`), where the right-hand
@@ -299,19 +297,14 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out
 
 
 def _initial_step_of(extended, coupled=False):
-    """Hairer's ``hinit`` on the right-hand side of the rigid body or (``extended``) of
-    :func:`orbatt.core.gyrostat.rhs_extended`, or (``coupled``) of
-    :func:`orbatt.core.mutual.rhs_coupled` with its per-component absolute tolerances."""
+    """Hairer's ``hinit`` on the right-hand side of the rigid body, or of (``extended``)
+    :func:`orbatt.core.gyrostat.rhs_extended` or (``coupled``) :func:`orbatt.core.mutual.rhs_coupled`."""
 
     def initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol, atol, hmax):
         """Hairer's ``hinit`` (order 8): a first step from the sizes of ``y``, ``f`` and an
         estimate of the second derivative (one extra RHS evaluation)."""
         aQ = atol * momentum_scale(inertia)
-        atv = atol * inertia[C_ATOL:C_ATOL + y.shape[0]] if coupled else inertia
-        if coupled:
-            dnf, dny = hinit_norms_vec(y, f0, atv, rtol)
-        else:
-            dnf, dny = hinit_norms(y, f0, atol, aQ, rtol)
+        dnf, dny = hinit_norms_vec(y, f0, atol, inertia, rtol) if coupled else hinit_norms(y, f0, atol, aQ, rtol)
         h = min(hinit_guess(dnf, dny), hmax)
         if not (h > 0.0 and h < np.inf):
             return h
@@ -319,12 +312,12 @@ def _initial_step_of(extended, coupled=False):
             ytmp[i] = y[i] + h * f0[i]
         if coupled:  # constants: numba prunes the other branches (their callees are not compiled)
             rhs_coupled(t + h, ytmp, inertia, terms, params, table, work, f1)
-            return min(100.0 * abs(h), hinit_refine(hinit_der2_vec(y, f0, f1, atv, rtol), dnf, h), hmax)
-        if extended:
+        elif extended:
             rhs_extended(t + h, ytmp, inertia, terms, params, table, work, f1)
         else:
             rhs(t + h, ytmp, inertia, terms, params, table, work, f1)
-        return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
+        der2 = hinit_der2_vec(y, f0, f1, atol, inertia, rtol) if coupled else hinit_der2(y, f0, f1, atol, aQ, rtol)
+        return min(100.0 * abs(h), hinit_refine(der2, dnf, h), hmax)
 
     return jit(initial_step)
 
@@ -554,8 +547,7 @@ advance_wide = _advance_of(0, True)
 advance_verner98 = _advance_of(NDIM, False, "verner98")
 #: :data:`advance_wide` with Verner's 9(8) pair (compiled on first use only)
 advance_wide_verner98 = _advance_of(0, True, "verner98")
-#: the step loop of a binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`), 14 or 22
-#: components, with DOP853 and with Verner's 9(8) pair (compiled on first use only)
+#: the loops of a binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`), DOP853, Verner 9(8)
 advance_coupled = _advance_of(0, False, coupled=True)
 advance_coupled_verner98 = _advance_of(0, False, "verner98", coupled=True)
 
