@@ -8,7 +8,8 @@ Modules: :mod:`._jit` (numba presets, intrinsics, status codes, flag names),
 :mod:`.qalg` (scalar quaternion algebra), :mod:`.kepler` and :mod:`.sampled` (orbits),
 :mod:`.potentials` (conservative terms), :mod:`.model` (the term list and the one dispatch
 on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+ :mod:`.dop853_coefficients`,
-:mod:`.dop853_lanes`) and :mod:`.splitting` (step loops).
+:mod:`.dop853_lanes`) and :mod:`.splitting` (step loops); :mod:`.mutual` and
+:mod:`.mutual_splitting` (a binary asteroid: the orbit and both attitudes together, ``DESIGN.md`` §12).
 
 The paper's equations (Arribas, Elipe & Palacios 2006) and where they are computed:
 
@@ -30,6 +31,8 @@ equation  what                                                function
 (15)      ``(q, Q)`` -> Euler angles and momenta              :func:`orbatt.euler.from_canonical`
 (18)      heavy top potential                                 :func:`.potentials.heavy_top`
 (20)      gravity gradient (MacCullagh) potential             :func:`.potentials.gravity_gradient`
+§12       mutual potential to second order, its gradient,     :func:`.mutual.potential_gradient`,
+          torques; the coupled equations; the splitting       :func:`.mutual.rhs_coupled`, :mod:`.mutual_splitting`
 ========  ==================================================  ==========================================
 """
 from __future__ import annotations

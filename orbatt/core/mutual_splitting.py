@@ -9,7 +9,7 @@ elliptic functions, the closed form of :mod:`orbatt.analytic`). The flow of ``U`
 (``r, q, q1`` fixed): the kick ``p <- p - tau dU/dr``, ``Q <- Q + tau 2 q (0, tau_B)``,
 ``Q1 <- Q1 + tau 2 q1 (0, tau1_B)``. Every piece is symplectic and conserves the total angular
 momentum (the free motions conserve each spin, the drift ``r x p``, the kick the sum:
-``r x dU/dr = -(tau2 + tau1)`` in the inertial frame), so the compositions keep ``L`` to
+``r x dU/dr = tau2 + tau1`` in the inertial frame), so the compositions keep ``L`` to
 round-off and the energy error bounded.
 
 The basic step is Strang's kick-flow-kick ``S(h) = U(h/2) T(h) U(h/2)`` (order 2); orders 4
