@@ -106,7 +106,8 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
         "orbit_a": _var(td, a, UN["length"], "osculating semi-major axis of the relative orbit about G (M1 + M2)"),
         "orbit_e": _var(td, e, "1", "osculating eccentricity of the relative orbit"),
         "orbit_i": _var(td, inc, "rad", "osculating inclination of the relative orbit to the inertial s1-s2 plane"),
-        "orbit_period": _var(td, period, "s", "osculating Keplerian period 2 pi sqrt(a^3 / (G (M1 + M2)))"),
+        "orbit_period": _var(td, period, "s", "osculating Keplerian period 2 pi sqrt(a^3 / (G (M1 + M2))) (point masses: "
+                              "the mean period differs by the bodies' oblateness)"),
         "q_norm_error": _var(td, norm_err, "1", "constraint residual |q| - 1 (secondary)"),
         "qQ": _var(td, qQ, UN["momentum"], "constraint residual q.Q (secondary)"),
     })
