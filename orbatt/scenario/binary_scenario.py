@@ -82,7 +82,7 @@ class BinaryScenario:
         a = -self.system.gm / (2 * eps)
         self.period = 2 * math.pi * math.sqrt(a**3 / self.system.gm)
         self.times, self.t_end = build_output_times(ctx, spec.integration, self.period)
-        self.impulses = [Impulse(t, tuple(dv)) for t, dv in spec.impulses]
+        self.impulses = [Impulse(float(t), tuple(map(float, dv))) for t, dv in spec.impulses]
         for j, k in enumerate(self.impulses):
             if k.time > self.times[-1]:
                 raise ctx.error(f"[[orbit.impulses]] {j} time", f"{k.time:g} s is after the last output "
