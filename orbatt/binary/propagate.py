@@ -169,7 +169,12 @@ def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-
             out[done:done + n_rec] = buf[:n_rec]
             done += n_rec
             if stop_reason is None and status != kd.DONE:
-                stop_reason = f"the step loop stopped at t = {st[kd.ST_T]:.9g} s (status {status})"
+                sep_now = float(np.linalg.norm(y[0:3]))
+                if status in (kd.NONFINITE, kd.STEP_TOO_SMALL) and sep_now <= contact * (1 + 1e-3):
+                    stop_reason = (f"contact at t = {st[kd.ST_T]:.9g} s: separation {sep_now:.6g} km, the bodies "
+                                   f"touch at {contact:.6g} km (the sum of the radii sqrt(tr I / M))")
+                else:
+                    stop_reason = f"the step loop stopped at t = {st[kd.ST_T]:.9g} s (status {status})"
             if stop_reason is not None:
                 break
         if stop_reason is not None:

@@ -153,7 +153,7 @@ class BinarySystem:
         vc = math.sqrt(self.gm / rn)
         return km.constants(self.G, self.primary_mass, self.mass, self.inertia, self.primary_inertia,
                             length_scale=rn, momentum_scale=self.reduced_mass * vc,
-                            full=self.potential == "coupled")
+                            full=self.potential == "coupled", contact=self.contact_distance)
 
     def state(self, position, velocity, q, omega, q_primary=(1.0, 0.0, 0.0, 0.0), omega_primary=(0.0, 0.0, 0.0)):
         """The flat state ``y`` (14 or 22 floats, :mod:`orbatt.core.mutual`).

@@ -53,20 +53,21 @@ from ._jit import jit, jit_inline
 from .qalg import qconj, qmul, qmul_pure, rotate, rotate_inv
 from .torques import gradient_of_torque
 
-__all__ = ["C_G", "C_M1", "C_M2", "C_MU", "C_FULL", "C_I2", "C_I1", "C_ATOL", "C_SIZE", "N_POINT", "N_RIGID", "constants",
+__all__ = ["C_G", "C_M1", "C_M2", "C_MU", "C_FULL", "C_CONTACT2", "C_I2", "C_I1", "C_ATOL", "C_SIZE", "N_POINT", "N_RIGID", "constants",
            "rhs_coupled", "hinit_norms_vec", "hinit_der2_vec", "potential", "potential_gradient", "torques", "energy", "angular_momentum", "evaluate"]
 
 #: slots of the constants ``c``: ``G``, ``M1``, ``M2``, the reduced mass, the model (1: the
-#: full mutual potential; 0: the secondary's torque only, :func:`constants`), the secondary's and
-#: the primary's principal moments (zeros for a point-mass primary), and from ``C_ATOL`` the
-#: scale of each state component's absolute tolerance (``atol * c[C_ATOL + i]``)
-C_G, C_M1, C_M2, C_MU, C_FULL, C_I2, C_I1, C_ATOL = 0, 1, 2, 3, 4, 5, 8, 11
+#: full mutual potential; 0: the secondary's torque only, :func:`constants`), the square of the
+#: contact distance, the secondary's and the primary's principal moments (zeros for a point-mass
+#: primary), and from ``C_ATOL`` the scale of each state component's absolute tolerance
+#: (``atol * c[C_ATOL + i]``)
+C_G, C_M1, C_M2, C_MU, C_FULL, C_CONTACT2, C_I2, C_I1, C_ATOL = 0, 1, 2, 3, 4, 5, 6, 9, 12
 #: state lengths: point-mass primary, rigid primary
 N_POINT, N_RIGID = 14, 22
 C_SIZE = C_ATOL + N_RIGID
 
 
-def constants(G, M1, M2, I2, I1=None, length_scale=1.0, momentum_scale=1.0, full=True):
+def constants(G, M1, M2, I2, I1=None, length_scale=1.0, momentum_scale=1.0, full=True, contact=0.0):
     """The constants array ``c`` of the kernels (plain floats, the caller's units).
 
     Parameters
@@ -87,11 +88,15 @@ def constants(G, M1, M2, I2, I1=None, length_scale=1.0, momentum_scale=1.0, full
         "gravity-gradient"`` with a coupled orbit): the orbit feels the point masses only
         (Keplerian about ``G (M1 + M2)``), the secondary the torque of eq. 20, the primary no
         torque; ``U`` keeps the secondary's term, so the energy is not an invariant then.
+    contact : float
+        The separation at which the bodies touch: :func:`rhs_coupled` returns NaN at or below it,
+        so that the step loop cannot step past a contact (it stops with its non-finite status).
     """
     c = np.zeros(C_SIZE)
     c[C_G], c[C_M1], c[C_M2] = G, M1, M2
     c[C_MU] = M1 * M2 / (M1 + M2)
     c[C_FULL] = 1.0 if full else 0.0
+    c[C_CONTACT2] = contact * contact
     c[C_I2:C_I2 + 3] = I2
     if I1 is not None:
         c[C_I1:C_I1 + 3] = I1
@@ -205,7 +210,11 @@ def _attitude_rates(y, k, c, ci, tau, dy):
 def rhs_coupled(t, y, c, terms, params, table, work, dy):
     """``dy/dt`` of the coupled system (module docstring) into ``dy``; ``t`` is not used (the
     system is autonomous), nor are ``terms, params, table, work`` (the step loop's model
-    arguments, kept for its one calling convention)."""
+    arguments, kept for its one calling convention). NaN at or inside the contact distance."""
+    if y[0] * y[0] + y[1] * y[1] + y[2] * y[2] <= c[C_CONTACT2]:
+        for j in range(y.shape[0]):
+            dy[j] = np.nan
+        return
     _, d, tau2, tau1 = potential_gradient(y, c)
     imu = 1.0 / c[C_MU]
     for j in range(3):

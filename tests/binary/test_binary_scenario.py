@@ -179,3 +179,15 @@ def test_splitting_from_the_scenario():
     assert np.max(np.abs(L - L[0])) < 1e-13 * np.linalg.norm(L[0])
     with pytest.raises(ScenarioError, match=r"\[integration\] step: missing"):
         parse(edit(text, 'step = "0.01 orbits"\n', ""), "eq.toml")
+
+
+def test_contact_between_outputs_stops_the_step_loop():
+    """Outputs too sparse to see the plunge: the right-hand side refuses the inside of the bodies,
+    so the step loop stops at the contact itself (not after passing through)."""
+    text = edit(PLUNGE, 'output_step = "0.1 orbits"', 'output_step = "1 orbits"')
+    sc = BinaryScenario(parse(text, "plunge.toml"))
+    with pytest.raises(IntegrationError, match="contact") as exc:
+        sc.run()
+    traj = exc.value.trajectory
+    assert traj.t.size == 1 and exc.value.t == 0.0   # only the start was an output
+    assert "touch at 0.517" in str(exc.value)
