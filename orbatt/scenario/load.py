@@ -19,7 +19,6 @@ from .build import (build_initial_state, build_kepler_orbit, build_output_times,
 from .fields import FieldContext
 from .schema import Spec, parse
 from .binary_schema import BinarySpec
-from .binary_scenario import BinaryScenario
 from ..dataset.build import dataset_content
 from ..dataset.content import Content
 from ..propagation import propagate
@@ -54,6 +53,8 @@ class Scenario:
 
     def __new__(cls, spec=None, path=None):
         if isinstance(spec, BinarySpec):  # [orbit] provider = "coupled": scenario/binary_scenario.py
+            from .binary_scenario import BinaryScenario  # (imported for binaries only)
+
             return BinaryScenario(spec, path=path)
         return super().__new__(cls)
 
