@@ -14,7 +14,7 @@ checks with orbatt's conical shadow function), over one orbit (5553 s). Two runs
 a. drag + gravity gradient: exponential atmosphere rho = 3e-12 kg/m^3 exp(-(h - 400 km) / 60 km),
    h = |r| - 6378.137 km, no co-rotation (Basilisk's facet drag without a wind message uses the
    inertial velocity: orbatt's ``corotation=False``);
-b. solar radiation pressure alone (DESIGN.md section 10's flat-plate law; the Sun from astropy).
+b. solar radiation pressure alone (docs/design.md §10's flat-plate law; the Sun from astropy).
 
 Three models of each:
 
@@ -28,7 +28,7 @@ Three models of each:
   ``facetSRPDynamicEffector`` fed by a Sun message written from astropy's Sun before every task
   step (at the step's midpoint), RKF78 at a fixed task step.
 
-Basilisk's facet SRP force is DESIGN's formula (same ``(1 - C_s) s + 2 (C_s cos t + C_d / 3) n``;
+Basilisk's facet SRP force is docs/design.md §10's formula (same ``(1 - C_s) s + 2 (C_s cos t + C_d / 3) n``;
 ``addFacet(area, dcm_F0B, nHat_F, rotHat_F, r_CopB_B, diffuseCoeff, specularCoeff)``, diffuse
 first) but with a flux of 1368 W/m^2 where orbatt uses 1361 W/m^2: the script gives Basilisk the
 areas scaled by 1361/1368 (force and torque are linear in the area) and checks the instantaneous
@@ -134,7 +134,7 @@ def torque_drag(R, v, rho):
 
 
 def torque_srp(R, r, sun):
-    """Flat-plate SRP (DESIGN.md section 10), full sunlight: F = -P A cos t [(1 - C_s) s +
+    """Flat-plate SRP (docs/design.md §10), full sunlight: F = -P A cos t [(1 - C_s) s +
     2 (C_s cos t + C_d/3) n] for cos t = n.s > 0."""
     d = sun - r
     dist = np.linalg.norm(d)

@@ -1,7 +1,7 @@
 """The coupled binary (Didymos-Dimorphos-like, rigid primary, every coupling acting) in orbatt and
 in heyoka, side by side: agreement and time over 100 orbits.
 
-heyoka writes the same equations (``DESIGN.md`` §12: ``(r, p)``, ``(q, Q)``, ``(q1, Q1)``, the
+heyoka writes the same equations (``docs/design.md`` §12: ``(r, p)``, ``(q, Q)``, ``(q1, Q1)``, the
 second-order mutual potential's gradient and torques, eq. 7 for each body) with its expression
 system, in scaled variables (lengths in the initial separation, time in ``1 / n``, momenta in
 their natural scales), since its error control takes the infinity norm of the whole state.

@@ -4,7 +4,7 @@
 
 The attitude is a steady spin about a tilted body axis (smooth like real output) of a
 dimensional body in a circular-orbit gravity gradient, so that every variable of
-DESIGN.md §6 is written (orbit ones included). Prints one line per step: seconds, MB/s of
+docs/design.md §6 is written (orbit ones included). Prints one line per step: seconds, MB/s of
 float64 payload, and the file size.
 """
 from __future__ import annotations

@@ -3,7 +3,7 @@
     python benchmarks/run.py            # a few minutes on 2 cores
     python benchmarks/run.py --quick    # smaller ensembles, fewer repeats (~1 minute)
 
-Cases (DESIGN.md §9, the paper's Sect. 6):
+Cases (docs/design.md §9, the paper's Sect. 6):
 
 * **Keplerian**: gravity gradient on a Keplerian orbit (a = 7000 km, e = 0.2, i = pi/6,
   raan = pi/4, argp = pi/12, f(t0) = 0), inertia (400, 500, 600) kg km^2, 10 orbits

@@ -73,7 +73,7 @@ omega2 = {{ distribution = "normal", std = "1e-4 rad/s" }}
 omega3 = {{ distribution = "normal", std = "1e-4 rad/s" }}
 """
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the paper's periapsis is inside the Earth (DESIGN.md §9)
+        warnings.simplefilter("ignore")  # the paper's periapsis is inside the Earth (docs/design.md §9)
         return Sweep(Scenario(parse(text, "paper-keplerian-sweep.toml")))
 
 

@@ -1,6 +1,6 @@
 """The exact torque-free rigid body (Euler-Poinsot motion) in orbatt's canonical variables.
 
-This is the test oracle for every integrator (``DESIGN.md`` §4): the closed-form flow of
+This is the test oracle for every integrator (``docs/design.md`` §4): the closed-form flow of
 Hamilton's equations (paper eq. 7) with ``U = 0``.
 
 Conventions and units

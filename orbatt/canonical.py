@@ -2,7 +2,7 @@
 
 Plain float arrays, no units (the caller's consistent unit system). Shapes broadcast:
 ``q, Q`` are ``(..., 4)``, 3-vectors ``(..., 3)``, ``inertia`` is ``(I1, I2, I3)`` (the
-principal moments; ``I0^-1 = 0``). Frames (``DESIGN.md`` §1-2):
+principal moments; ``I0^-1 = 0``). Frames (``docs/design.md`` §1-2):
 
 * ``omega`` - body angular velocity ``2 q~ dq/dt``, **body** components;
 * ``g = I omega`` - angular momentum, **body** components;

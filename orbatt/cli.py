@@ -94,7 +94,10 @@ def _cmd_run(args):
 
     cold = coldstart.plan(args.scenario, args.method)
     if cold is None:
-        return _run(args, None)
+        code = _run(args, None)
+        if code == 0:  # every kernel of this kind is compiled and cached now: no interpreted next run
+            coldstart.mark_warm(args.scenario, args.method)
+        return code
     os.environ["NUMBA_DISABLE_JIT"] = "1"  # a first run of this kind: interpreted kernels (before numba's import)
     try:
         return _run(args, cold)
@@ -140,8 +143,11 @@ def _run(args, cold):
             raise  # rerun compiled (_cmd_run)
         _write_partial(exc, out)
         raise
-    if cold is not None and cold.switched:  # the kernels compiled meanwhile: finish compiled
-        return cold.rerun_compiled(args.argv)
+    if cold is not None and cold.switched:  # the kernels compiled meanwhile (or the run is long): finish compiled
+        if cold.projected is not None and not args.quiet:
+            print(f"orbatt: this run would take ~{cold.projected:.0f} s interpreted; waiting for the compiler instead",
+                  file=sys.stderr)
+        return cold.rerun_compiled(args.argv, stream=None if args.quiet or cold.projected is None else sys.stderr)
     wall = time.perf_counter() - t0
     write_netcdf(content, out)
     if not args.quiet:

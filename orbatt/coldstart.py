@@ -16,9 +16,19 @@ the compiler:
    the scenario compiled over its first outputs only, which fills numba's cache, and writes the
    stamp (one warm-up per kind at a time: a lock file holds its pid);
 3. the interpreted run goes on until it is done or the stamp appears: then it stops and the same
-   command runs again, compiled, from the cache (:meth:`ColdStart.rerun_compiled`). A run that
-   fails in the interpreted kernels (an exception Python raises where compiled code gives inf or
-   NaN) also waits for the warm-up and runs again compiled, so errors are the compiled code's.
+   command runs again, compiled, from the cache (:meth:`ColdStart.rerun_compiled`). A run whose
+   projected interpreted time (measured over its first 2 s) exceeds :data:`LONG_RUN_S` stops
+   too and waits for the compiler in the foreground, saying so (a disturbed day-long study
+   would interpret for minutes). A run that fails in the interpreted kernels (an exception
+   Python raises where compiled code gives inf or NaN) also waits for the warm-up and runs
+   again compiled, so errors are the compiled code's.
+
+The child processes (warm-up, compiled rerun) run ``python -P``: started from a clone's root,
+they import the installed orbatt the parent runs, not the source tree ``./orbatt`` beside it
+(the warm-up checks the folder it imported and writes no stamp for another one). A compiled
+``orbatt run`` (``ORBATT_COLD_START=compile``) writes its kind's stamp too (:func:`mark_warm`),
+so the next plain run does not interpret. An unreadable (truncated, corrupted) entry of numba's
+cache is removed and recompiled, with a warning (:mod:`orbatt.core._jit`).
 
 Measured on the shipped ``paper-keplerian`` with an empty cache (2-core machine): 23.6 s
 compiled before, 1.8 s interpreted, the same file contents bit for bit
@@ -36,18 +46,26 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import platform
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from .shipped import scenario_file
 
-__all__ = ["ENV_MODE", "ColdStart", "plan", "kernel_key", "fingerprint", "stamp_folder", "warm_up"]
+__all__ = ["ENV_MODE", "LONG_RUN_S", "PROJECT_AFTER_S", "ColdStart", "plan", "kernel_key", "fingerprint",
+           "stamp_folder", "warm_up", "mark_warm", "write_stamp"]
 
 #: the environment variable that turns interpreted first runs off (``compile``)
 ENV_MODE = "ORBATT_COLD_START"
+#: an interpreted first run projected to take longer than this (s) stops and waits for the
+#: compiler instead (compiling a kind's kernels takes 20-60 s on a 2-core machine)
+LONG_RUN_S = 20.0
+#: the interpreted run's projection starts after this much wall time (s)
+PROJECT_AFTER_S = 2.0
 _PACKAGE = Path(__file__).resolve().parent
 
 
@@ -109,6 +127,14 @@ def kernel_key(scenario, method=None) -> str | None:
     return f"{''.join(c if c.isalnum() or c in '-_' else '_' for c in str(m))[:40]}-{digest}"
 
 
+def _python() -> list[str]:
+    """The interpreter command of the child processes (warm-up, compiled rerun): ``-P`` keeps
+    the current folder off ``sys.path``, so a child started from a clone's root imports the
+    installed orbatt the parent runs, not the source tree ``./orbatt`` beside it (whose
+    fingerprint never matches the installed one: every later run would interpret)."""
+    return [sys.executable, "-P"]
+
+
 def _compiled_env() -> dict:
     """This process's environment for a child that runs compiled: no ``NUMBA_DISABLE_JIT``,
     and ``ORBATT_COLD_START=compile`` (it never starts a warm-up of its own)."""
@@ -138,6 +164,7 @@ class ColdStart:
         self.lock = self.folder / f"warm-{key}.lock"
         self.process = None
         self.switched = False
+        self.projected = None  # the projected interpreted time (s) when that stopped the run
         self._fingerprint = None  # this process's sources do not change while it runs
 
     def is_warm(self) -> bool:
@@ -161,8 +188,8 @@ class ColdStart:
                 return True
         except (OSError, ValueError):
             pass
-        cmd = [sys.executable, "-m", "orbatt.coldstart", str(self.scenario), str(self.method or ""),
-               str(self.stamp)]
+        cmd = [*_python(), "-m", "orbatt.coldstart", str(self.scenario), str(self.method or ""),
+               str(self.stamp), str(_PACKAGE)]
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
             self.process = subprocess.Popen(cmd, env=_compiled_env(), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
@@ -177,28 +204,73 @@ class ColdStart:
 
     def progress(self, inner):
         """A progress callback for the interpreted run: ``inner`` (None or a callback), and
-        False (stop) once the warm-up's stamp is there."""
+        False (stop) once the warm-up's stamp is there, or once the run's projected
+        interpreted time exceeds :data:`LONG_RUN_S` (measured over its first
+        :data:`PROJECT_AFTER_S` seconds: a long study then waits for the compiler in the
+        foreground, :attr:`projected` set, instead of interpreting for minutes)."""
         def report(info):
             if self.is_warm():
                 self.switched = True
                 return False
+            if info.wall_time_s >= PROJECT_AFTER_S:
+                projected = info.wall_time_s / info.fraction if info.fraction > 0 else math.inf
+                if projected > LONG_RUN_S:
+                    self.switched, self.projected = True, projected
+                    return False
             return inner(info) if inner is not None else None
 
         return report
 
-    def wait_for_warm_up(self, timeout=600.0):
-        """Wait until the warm-up process has ended (at most ``timeout`` seconds)."""
-        if self.process is not None:
-            try:
-                self.process.wait(timeout)
-            except subprocess.TimeoutExpired:
-                pass
+    def wait_for_warm_up(self, timeout=600.0, stream=None):
+        """Wait until the warm-up process has ended (at most ``timeout`` seconds); with a
+        ``stream``, say so there and how long the compiler took."""
+        if self.process is None:
+            return
+        t0 = time.monotonic()
+        if stream is not None:
+            stream.write("orbatt: compiling the kernels of this kind of scenario (once; typically 20-60 s) ...\n")
+            stream.flush()
+        try:
+            self.process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            pass
+        if stream is not None:
+            stream.write(f"orbatt: compiled in {time.monotonic() - t0:.0f} s; running compiled\n")
+            stream.flush()
 
-    def rerun_compiled(self, argv) -> int:
+    def rerun_compiled(self, argv, stream=None) -> int:
         """Run ``orbatt argv`` again in a new process with the compiled kernels (after the
-        warm-up has filled the cache); its exit code."""
-        self.wait_for_warm_up()
-        return subprocess.call([sys.executable, "-m", "orbatt.cli", *argv], env=_compiled_env())
+        warm-up has filled the cache; ``stream``: see :meth:`wait_for_warm_up`); its exit code."""
+        self.wait_for_warm_up(stream=stream)
+        return subprocess.call([*_python(), "-m", "orbatt.cli", *argv], env=_compiled_env())
+
+
+def mark_warm(scenario, method=None) -> bool:
+    """After a compiled ``orbatt run`` of ``scenario`` (``ORBATT_COLD_START=compile``, or a
+    first run that could not interpret): write this kind's warm stamp, since the run compiled
+    and cached every kernel of its kind, so the next plain run of the kind does not interpret
+    again. True when a stamp was written; False where none is needed or none can be written."""
+    if os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"):
+        return False  # nothing was compiled
+    key = kernel_key(scenario, method)
+    if key is None:
+        return False
+    cold = ColdStart(scenario, method, key, stamp_folder())
+    if cold.is_warm() or not _writable(cold.folder):
+        return False
+    write_stamp(cold.stamp)
+    return True
+
+
+def write_stamp(stamp) -> None:
+    """Write the warm ``stamp`` (this process's :func:`fingerprint`) atomically."""
+    stamp = Path(stamp)
+    tmp = stamp.with_name(f".{stamp.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(json.dumps(fingerprint()))
+        os.replace(tmp, stamp)
+    except OSError:
+        tmp.unlink(missing_ok=True)
 
 
 def plan(scenario, method=None) -> ColdStart | None:
@@ -230,9 +302,15 @@ def _writable(folder: Path) -> bool:
     return os.access(folder, os.W_OK | os.X_OK)
 
 
-def warm_up(scenario, method, stamp) -> int:
+def warm_up(scenario, method, stamp, package=None) -> int:
     """The warm-up process: run ``scenario`` compiled over its first outputs (which compiles
-    and caches every kernel a full run calls), then write the warm ``stamp``; 0 on success."""
+    and caches every kernel a full run calls), then write the warm ``stamp``; 0 on success.
+
+    ``package``: the folder of the orbatt the parent run imported; a warm-up that imported
+    another one (a source tree on ``sys.path``) compiles the wrong files, so it writes no
+    stamp and returns 3."""
+    if package is not None and Path(package).resolve() != _PACKAGE:
+        return 3
     try:
         os.nice(10)  # behind the interpreted run it speeds up for
     except (AttributeError, OSError):  # pragma: no cover - no nice() on this platform
@@ -246,9 +324,7 @@ def warm_up(scenario, method, stamp) -> int:
     except Exception:  # noqa: BLE001 - a failing run still compiled its kernels
         pass
     stamp = Path(stamp)
-    tmp = stamp.with_name(f".{stamp.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(fingerprint()))
-    os.replace(tmp, stamp)
+    write_stamp(stamp)
     try:
         lock = stamp.with_suffix(".lock")
         if lock.read_text().strip() == str(os.getpid()):
@@ -259,4 +335,4 @@ def warm_up(scenario, method, stamp) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover - the warm-up process (ColdStart.start_warm_up)
-    sys.exit(warm_up(sys.argv[1], sys.argv[2], sys.argv[3]))
+    sys.exit(warm_up(*sys.argv[1:5]))

@@ -1,5 +1,5 @@
 """Attitude control and reaction wheels, with units at the boundary (kernels in
-:mod:`orbatt.core.control` and :mod:`orbatt.core.gyrostat`; physics in ``DESIGN.md`` §10).
+:mod:`orbatt.core.control` and :mod:`orbatt.core.gyrostat`; physics in ``docs/design.md`` §10).
 
 * :class:`ReactionWheel`: a rotor of the body (``RigidBody(..., wheels=[...])``), which makes it
   a gyrostat: the state becomes ``(q, Q, h)`` with ``h`` the rotors' axial momenta, and

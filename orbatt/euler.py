@@ -10,7 +10,7 @@ components, with ``A = (Phi - Psi cos theta) / sin theta``::
 Euler angles are singular at ``theta = 0, pi``: they are an input/output convenience and an
 independent formulation for tests, never what orbatt integrates. Plain floats, no units.
 
-Paper errata handled here (``DESIGN.md`` §3a): eq. (10)'s last term is ``Psi^2 / (2 I3)``;
+Paper errata handled here (``docs/design.md`` §3a): eq. (10)'s last term is ``Psi^2 / (2 I3)``;
 the paper's initial ``theta = 3 pi/2`` lies outside ``(0, pi)`` - eqs. (12) and (14) accept
 it, eqs. (13) and (15) return the equivalent ``(5 pi/4, pi/2, 5 pi/4)`` with ``Theta`` of
 opposite sign.

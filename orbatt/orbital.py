@@ -1,4 +1,4 @@
-"""Attitude and rates relative to the orbital frame ``O`` (LVLH-type), ``DESIGN.md`` §1.
+"""Attitude and rates relative to the orbital frame ``O`` (LVLH-type), ``docs/design.md`` §1.
 
 Frames and names (Basilisk style: ``q_BO`` is ``B`` relative to ``O``, ``omega_BO_B`` the
 angular velocity of ``B`` relative to ``O`` in ``B`` components):
@@ -184,7 +184,7 @@ def lvlh_angles(q_orbital):
     names them.
 
     orbatt's orbital frame has ``o1`` radial (zenith), ``o2`` along-track, ``o3`` the orbit
-    normal (``DESIGN.md`` §1). **Roll** is the rotation about the along-track axis ``o2``,
+    normal (``docs/design.md`` §1). **Roll** is the rotation about the along-track axis ``o2``,
     **pitch** about the orbit normal ``o3`` (the in-plane libration of a gravity-gradient
     satellite), **yaw** about the radial axis ``o1``, in the aerospace 3-2-1 sequence taken in
     the relabelled axes ``(x', y', z') = (o2, o3, o1)``: first yaw about ``o1``, then pitch

@@ -155,7 +155,7 @@ class TorqueFree(Potential):
 
 
 class HeavyTop(Potential):
-    """Heavy top in uniform gravity along ``-s3`` (paper eq. 18; ``DESIGN.md`` §3).
+    """Heavy top in uniform gravity along ``-s3`` (paper eq. 18; ``docs/design.md`` §3).
 
     Parameters
     ----------
@@ -202,7 +202,7 @@ class HeavyTop(Potential):
 
 class GravityGradient(Potential):
     """Gravity-gradient (MacCullagh) potential of a point-mass central body, eq. (20)
-    (``DESIGN.md`` §3), driven by an orbit provider (:mod:`orbatt.orbits`).
+    (``docs/design.md`` §3), driven by an orbit provider (:mod:`orbatt.orbits`).
 
     ``U = (3 GM / 2 r^3) x_B . (I x_B)`` with ``x_B = q~ X q`` the radial unit vector in
     body components (``X = p s1 p~``); tangential gradient (extension as a function of

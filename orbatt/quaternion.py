@@ -1,7 +1,7 @@
 """Quaternion algebra on float64 arrays of shape ``(..., 4)``: orbatt's conventions.
 
-Conventions (stated here once; ``DESIGN.md`` §1 is the reference)
------------------------------------------------------------------
+Conventions (stated here once; ``docs/design.md`` §1 is the reference)
+----------------------------------------------------------------------
 * **Scalar first**: ``q = (q0, q1, q2, q3)`` = ``q0 + q1 i + q2 j + q3 k``, stored in the
   last axis. Every function broadcasts over the leading axes.
 * Product ``q p = (q0 p0 - q.p, q0 p + p0 q + q x p)`` (Hamilton, ``i j = k``).
@@ -201,7 +201,7 @@ def to_matrix(q):
     """Rotation matrix ``R`` with ``R x = q x q~`` (shape ``(..., 3, 3)``; ``q`` normalized).
 
     Note: the matrix printed in the paper's Sect. 2 is the transpose of this one
-    (``DESIGN.md`` §3a item 2).
+    (``docs/design.md`` §3a item 2).
     """
     q = normalize(q)
     w, x, y, z = np.moveaxis(q, -1, 0)

@@ -1,5 +1,5 @@
 """Environment torques on a body of flat plates along a prescribed orbit, with units at the
-boundary (``DESIGN.md`` §10): aerodynamic drag, solar radiation pressure and a residual
+boundary (``docs/design.md`` §10): aerodynamic drag, solar radiation pressure and a residual
 magnetic dipole, with or without the gravity gradient.
 
 The orbit is prescribed, so every field that depends on position and time alone - the
@@ -21,6 +21,7 @@ from astropy import units as u
 
 from . import units as U
 from .core import model as km
+from .core.kinds import BY_NAME
 from .core import potentials as kp
 from .environment import sun as esun
 from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
@@ -30,10 +31,10 @@ from .errors import InputError
 from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
 
-__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES"]
+__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "sample_margin"]
 
-#: names of the terms, as in the Dataset variables ``torque_<name>``
-TERM_NAMES = {km.GRAVITY_GRADIENT: "gravity_gradient", km.DRAG: "drag", km.SRP: "srp", km.MAGNETIC: "magnetic"}
+#: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
+TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
 _AREA = u.m**2
 _LENGTH_M = u.m
 
@@ -44,6 +45,31 @@ def _quantity(value, unit, name):
     if isinstance(value, (list, tuple)) and any(isinstance(v, (str, u.Quantity)) for v in value):
         return np.array([U.strip(v, unit, f"{name}[{k}]") for k, v in enumerate(value)], dtype=np.float64)
     return U.strip(value, unit, name)
+
+
+def sample_margin(*, drag=False, srp=False, magnetic=False, sun=False):
+    """How far (s) before the start and after the end of a run :class:`EnvironmentTorques`
+    samples the orbit: one step of the coarsest table it builds.
+
+    Parameters
+    ----------
+    drag, srp, magnetic, sun : bool
+        The tables built: density (drag, :data:`~orbatt.environment.tables.DENSITY_STEP`),
+        Sun position (SRP or a PD law pointing at the Sun,
+        :data:`~orbatt.environment.tables.SUN_STEP`), magnetic field (a residual dipole or
+        B-dot, :data:`~orbatt.environment.tables.MAGNETIC_FIELD_STEP`).
+
+    Returns
+    -------
+    float
+        The margin (s), 0 without tables. An orbit sampled over ``[t_start - margin, t_end +
+        margin]`` (a TLE's, which SGP4 propagates either side of its epoch) keeps the
+        tables' end intervals outside the run; a shorter one cuts the margin (still within
+        the tables' stated errors).
+    """
+    steps = [step for on, step in ((drag, DENSITY_STEP), (srp or sun, SUN_STEP), (magnetic, MAGNETIC_FIELD_STEP))
+             if on]
+    return max(steps, default=0.0)
 
 
 class Facet:
@@ -112,10 +138,14 @@ class EnvironmentTorques(Potential):
 
     Parameters
     ----------
-    orbit : OrbitProvider
+    orbit : OrbitProvider or None
         The orbit (GCRS when it has an epoch). SRP, IGRF and NRLMSIS need ``orbit.epoch``.
-    t_end : Quantity (time)
-        The end of the runs (the environment is sampled over ``[t_start, t_end]``).
+        None: no term reads an orbit (a torque-free body with a ``constant_torque``).
+    t_end : Quantity (time) or None
+        The end of the runs (the environment is sampled over ``[t_start, t_end]`` and a
+        margin either side, :func:`sample_margin`, cut to a sampled orbit's span, which must
+        hold ``[t_start, t_end]``); None without an orbit (nothing is sampled: the terms are
+        defined at all times).
     facets : sequence of Facet
         The plates of the body (drag and SRP need at least one).
     gravity_gradient : bool
@@ -137,6 +167,9 @@ class EnvironmentTorques(Potential):
         A control law in the loop (:mod:`orbatt.control`): B-dot reads ``magnetic_field``; a
         PD law pointing at the Sun needs the orbit's epoch. Its torque is not a term of
         ``torque``: a Dataset records it as ``torque_control`` (and ``dipole_control``).
+    constant_torque : Quantity (3,) (torque), optional
+        A constant body torque (body axes; thruster misalignment, outgassing): the term
+        ``torque_constant``. It reads no orbit.
     """
 
     name = "environment"
@@ -144,13 +177,27 @@ class EnvironmentTorques(Potential):
 
     def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
                  residual_dipole=None, atmosphere=None, magnetic_field=None, shadow="conical", corotation=True,
-                 t_start=0.0 * u.s, control=None):
-        if not isinstance(orbit, OrbitProvider):
+                 t_start=0.0 * u.s, control=None, constant_torque=None):
+        const = None
+        if constant_torque is not None:
+            const = _quantity(constant_torque, u.N * u.m, "constant_torque")
+            if np.shape(const) != (3,) or not np.all(np.isfinite(const)):
+                raise InputError(f"constant_torque: expected 3 finite torques (body axes), got {constant_torque!r}")
+        self.constant_torque = const
+        if orbit is None:
+            needs = [n for n, on in (("gravity_gradient", gravity_gradient), ("drag", drag), ("srp", srp),
+                                     ("residual_dipole", residual_dipole is not None), ("control", control is not None))
+                     if on]
+            if needs:
+                raise InputError(f"orbit: {needs[0]} needs an orbit provider (KeplerOrbit, ReboundOrbit, TleOrbit)")
+            if const is None:
+                raise InputError("constant_torque: without an orbit the torques need a constant_torque")
+        elif not isinstance(orbit, OrbitProvider):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got {type(orbit).__name__}")
         self.orbit = orbit
         t0 = float(_quantity(t_start, u.s, "t_start"))
-        t1 = float(_quantity(t_end, u.s, "t_end"))
-        if not t1 > t0:
+        t1 = None if orbit is None and t_end is None else float(_quantity(t_end, u.s, "t_end"))
+        if t1 is not None and not t1 > t0:
             raise InputError(f"t_end: {t_end!r} must come after t_start = {t_start!r}")
         self.facets = list(facets)
         if not all(isinstance(f, Facet) for f in self.facets):
@@ -186,23 +233,44 @@ class EnvironmentTorques(Potential):
             raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
         self.control = control
         self._control_rows = {}
-        self.span = (t0, t1)
-        self.kind, self.params, self.table = orbit.kernel()
+        valid = None if orbit is None else orbit.time_span
+        if valid is not None and (t0 < valid[0] or t1 > valid[1]):
+            key, value = ("t_start", t0) if t0 < valid[0] else ("t_end", t1)
+            hint = getattr(orbit, "span_hint", "build the orbit over a longer span")
+            raise InputError(f"{key}: {value!r} s is outside the span [{valid[0]!r}, {valid[1]!r}] s the orbit "
+                             f"was sampled over; {hint}")
+        self.span = None if orbit is None else (t0, t1)
+        if orbit is None:
+            self.kind, self.params, self.table = kp.TORQUE_FREE, np.zeros(1), kp.EMPTY_TABLE
+        else:
+            self.kind, self.params, self.table = orbit.kernel()
         self._fields = {}
 
     # --- the kernel model
     def _samples(self, step):
+        """Samples every ``step`` (s) over the run and a margin of one step on each side, so
+        that the spline's end intervals (not-a-knot) lie outside the run; the margin is cut
+        to the span of a sampled orbit (:func:`sample_margin` says how far to sample one, e.g.
+        a TLE, to keep it whole). A cut margin puts the end intervals inside the run, whose
+        error the steps' stated errors already cover (:mod:`orbatt.environment.tables`
+        measures them on tables without a margin); at least 3 intervals."""
         t0, t1 = self.span
-        # a margin of one step on each side, so that the spline covers the whole run
-        return sample_along_orbit(self.orbit, (t0 - step) * u.s, (t1 + step) * u.s, step * u.s)
+        valid = self.orbit.time_span
+        lo, hi = t0 - step, t1 + step
+        if valid is not None:
+            lo, hi = max(lo, valid[0]), min(hi, valid[1])
+        step = min(step, (hi - lo) / 3.0)
+        return sample_along_orbit(self.orbit, lo * u.s, hi * u.s, step * u.s)
 
     def build_model(self):
         """The compiled model ``(terms, params, table)`` (:mod:`orbatt.core.model`): the orbit,
-        then gravity gradient, drag, SRP, magnetic, in that order (those enabled); built once,
-        by :meth:`kernel_model`."""
-        okind, oparams, otable = km.from_spec(self.kind, self.params, self.table)
-        orbit_row = (int(okind[0, km.KIND]), oparams[okind[0, km.P0]:okind[0, km.P1]],
-                     otable[okind[0, km.R0]:okind[0, km.R1]] if okind[0, km.R1] > okind[0, km.R0] else None)
+        then gravity gradient, drag, SRP, magnetic, constant torque, in that order (those
+        enabled); built once, by :meth:`kernel_model`."""
+        orbit_row = None
+        if self.orbit is not None:
+            okind, oparams, otable = km.from_spec(self.kind, self.params, self.table)
+            orbit_row = (int(okind[0, km.KIND]), oparams[okind[0, km.P0]:okind[0, km.P1]],
+                         otable[okind[0, km.R0]:okind[0, km.R1]] if okind[0, km.R1] > okind[0, km.R0] else None)
         gm = float(self.params[0])
         rows, self.term_kinds = [], []
         if self.gravity_gradient:
@@ -224,6 +292,8 @@ class EnvironmentTorques(Potential):
         if self.residual_dipole is not None:
             s = self._samples(MAGNETIC_FIELD_STEP)
             rows.append((km.MAGNETIC, self.residual_dipole * 1e-6, tabulate(s, self.magnetic_field.field)))
+        if self.constant_torque is not None:
+            rows.append((km.CONSTANT_TORQUE, self.constant_torque * 1e-6, None))  # N m -> kg km^2 s^-2
         self.term_kinds = [r[0] for r in rows]
         return km.build(orbit=orbit_row, terms=rows)
 
@@ -300,9 +370,11 @@ class EnvironmentTorques(Potential):
 
     def describe(self):
         d = {"kind": self.name, "gravity_gradient": self.gravity_gradient, "drag": self.drag, "srp": self.srp,
-             "orbit": self.orbit.describe(), "facets": [f.describe() for f in self.facets],
-             "shadow": self.shadow, "corotation": self.corotation,
-             "sampled_span_s": list(self.span)}
+             "orbit": None if self.orbit is None else self.orbit.describe(),
+             "facets": [f.describe() for f in self.facets], "shadow": self.shadow, "corotation": self.corotation,
+             "sampled_span_s": None if self.span is None else list(self.span)}
+        if self.constant_torque is not None:
+            d["constant_torque_N_m"] = self.constant_torque.tolist()
         if self.residual_dipole is not None:
             d["residual_dipole_A_m2"] = self.residual_dipole.tolist()
         if self.atmosphere is not None:

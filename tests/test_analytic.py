@@ -3,7 +3,7 @@ eq. (7) (the compiled kernel) and of the classical model (Euler's equations + qu
 kinematics), in every regime; invariants; input handling.
 
 Integrations use scipy's DOP853 at rtol = atol = 1e-13 and are compared at the integrator's
-own step ends, not through its dense output (``DESIGN.md`` §4: dense output is much less
+own step ends, not through its dense output (``docs/design.md`` §4: dense output is much less
 accurate than the steps at this tolerance). The analytic solution itself was checked against
 a 30-digit mpmath Taylor integration to 4e-15 (see the module docstring); the tolerances
 below are those of the integrations (each test notes the error measured when it was written).

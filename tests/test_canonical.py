@@ -61,7 +61,7 @@ def test_eq10_needs_the_inverse_I3_on_psi_squared():
 
 
 def test_paper_initial_data_both_forms():
-    """DESIGN.md §3a items 5, 6 and 9: what the paper's two forms of the Sect. 6.1 initial
+    """docs/design.md §3a items 5, 6 and 9: what the paper's two forms of the Sect. 6.1 initial
     state give. Eq. (12) at (pi/4, 3pi/2, pi/4) gives -q(t0); eq. (14) gives +Q(t0) (to the
     6 printed digits): the printed (q, Q) pair has g = (-0.0707107, 0.7778173, -0.4), the
     opposite of the Euler-variable state's g."""
@@ -82,7 +82,7 @@ def test_paper_initial_data_both_forms():
 
 
 def test_node_vector_and_b1():
-    """DESIGN.md §3a item 3: b1 = l cos psi + (b3 x l) sin psi (the print has s3 x l)."""
+    """docs/design.md §3a item 3: b1 = l cos psi + (b3 x l) sin psi (the print has s3 x l)."""
     rng = np.random.default_rng(5)
     for phi, th, ps in rng.uniform([-3, 0.1, -3], [3, 3.0, 3], size=(20, 3)):
         q = qt.from_euler313(phi, th, ps)
@@ -93,7 +93,7 @@ def test_node_vector_and_b1():
 
 
 def test_paper_matrix_is_the_transpose():
-    """DESIGN.md §3a item 2: the printed R (rows R(e_i) = p e_i p~ read as rows) is the
+    """docs/design.md §3a item 2: the printed R (rows R(e_i) = p e_i p~ read as rows) is the
     transpose of x -> p x p~."""
     q = qt.normalize([0.3, -0.2, 0.9, 0.1])
     rows = np.array([qt.rotate(q, e) for e in np.eye(3)])

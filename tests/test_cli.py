@@ -18,7 +18,7 @@ SHORT = {  # t_end for a short CI run of each shipped scenario
     "hyperion-chaotic": '"5 d"', "sso-j2-rebound": '"300 s"', "gg-leo-dispersion": '"600 s"',
     "iss-tle-gravity-gradient": '"600 s"', "cubesat-3u-disturbances": '"600 s"',
     "mercury-3-2-normalized": "0.7", "hyperion-chaotic-normalized": "1.5",
-    "cubesat-bdot-detumble": '"600 s"', "lvlh-hold-wheels": '"600 s"',
+    "cubesat-bdot-detumble": '"600 s"', "lvlh-hold-wheels": '"600 s"', "iss-tle-disturbances": '"600 s"',
     "didymos-dimorphos": '"1.5 d"', "sphere-ellipsoid-equilibrium": '"1 orbits"',
 }
 

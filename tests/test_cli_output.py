@@ -159,30 +159,50 @@ def _good_result(folder):
     return out, out.read_bytes()
 
 
+#: a child ``orbatt run`` whose result write blocks right before the rename of its complete
+#: temporary file (the window the atomic write protects), after touching ``argv[1]``, until
+#: ``argv[1] + ".go"`` exists
+HELD_WRITE = """
+import os, sys, time
+marker = sys.argv.pop(1)
+real = os.replace
+def held(src, dst, *a, **k):
+    if os.path.basename(str(src)).startswith('.tmp-'):
+        open(marker, 'w').close()
+        while not os.path.exists(marker + '.go'):
+            time.sleep(0.01)
+    return real(src, dst, *a, **k)
+os.replace = held
+from orbatt.cli import main
+sys.exit(main())
+"""
+
+
 def _signal_during_write(folder, out, sig):
-    """Start a run writing a large result over ``out``; send ``sig`` as soon as the temporary
-    file of the write appears. Returns (process, whether the write was caught in progress)."""
-    big = scenario(folder, t_end="800", output_step="0.005", file="big.toml")
-    proc = subprocess.Popen([sys.executable, "-m", "orbatt.cli", "run", str(big), "-o", str(out), "--quiet"],
-                            cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    caught = False
+    """Start a run writing a result over ``out``, held inside its write (:data:`HELD_WRITE`);
+    send ``sig`` once it is there. Returns (process, whether the write was reached)."""
+    big = scenario(folder, t_end="80", output_step="0.005", file="big.toml")
+    marker = folder / "inside-the-write"
+    proc = subprocess.Popen([sys.executable, "-c", HELD_WRITE, str(marker), "run", str(big), "-o", str(out),
+                             "--quiet"], cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "ORBATT_COLD_START": "compile"})
     deadline = time.monotonic() + 300
-    while proc.poll() is None and time.monotonic() < deadline:
-        if any(p.name.startswith(f".tmp-{out.name}.") for p in folder.iterdir()):
-            time.sleep(0.05)  # well into the write
-            proc.send_signal(sig)
-            caught = True
-            break
-        time.sleep(0.002)
+    while proc.poll() is None and time.monotonic() < deadline and not marker.exists():
+        time.sleep(0.01)
+    caught = marker.exists() and proc.poll() is None
+    if caught:
+        assert any(p.name.startswith(f".tmp-{out.name}.") for p in folder.iterdir())
+        proc.send_signal(sig)
+    else:
+        proc.kill()
     return proc, caught
 
 
 def test_sigkill_during_the_write_keeps_the_earlier_result(tmp_path):
     out, before = _good_result(tmp_path)
     proc, caught = _signal_during_write(tmp_path, out, signal.SIGKILL)
-    proc.communicate(timeout=120)
-    if not caught or proc.returncode == 0:
-        pytest.skip("the write finished before the kill (machine too fast to catch it)")
+    _, err = proc.communicate(timeout=120)
+    assert caught, err
     assert proc.returncode == -signal.SIGKILL
     assert out.read_bytes() == before  # untouched, readable
     assert orbatt.open_dataset(out, load=True)["time"].size == 101
@@ -191,12 +211,14 @@ def test_sigkill_during_the_write_keeps_the_earlier_result(tmp_path):
 def test_ctrl_c_during_the_write_leaves_a_complete_file(tmp_path):
     out, before = _good_result(tmp_path)
     proc, caught = _signal_during_write(tmp_path, out, signal.SIGINT)
+    time.sleep(0.5)  # the interrupt is in while the write is held
+    (tmp_path / "inside-the-write.go").touch()
     _, err = proc.communicate(timeout=120)  # no deadlock
-    if not caught:
-        pytest.skip("the write finished before the interrupt (machine too fast to catch it)")
+    assert caught, err
     assert proc.returncode in (0, 130), err
-    ds = D.open_dataset(out, load=True)
-    if out.read_bytes() != before:  # the new result, complete
-        assert ds["time"].size == 160001
-        assert np.isfinite(ds["energy"].values).all()
+    assert "finishing the write" in err
+    ds = D.open_dataset(out, load=True)  # the write was finished: the new result, complete
+    assert out.read_bytes() != before
+    assert ds["time"].size == 16001
+    assert np.isfinite(ds["energy"].values).all()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp-")]

@@ -141,13 +141,16 @@ def test_kernel_key_follows_the_model_not_the_numbers(tmp_path, shipped_outputs)
 
 
 def test_warm_up_writes_the_stamp_and_the_run_switches(tmp_path):
+    from orbatt.progress import ProgressInfo
+
     cold = coldstart.ColdStart("paper-torque-free", None, coldstart.kernel_key("paper-torque-free"), tmp_path)
     seen = []
     report = cold.progress(seen.append)
-    assert report("info") is None and seen == ["info"] and not cold.is_warm()
+    info = ProgressInfo(0.5, 1.0, 2.0, 10, 0.1)
+    assert report(info) is None and seen == [info] and not cold.is_warm()
     assert coldstart.warm_up("paper-torque-free", "", cold.stamp) == 0
     assert cold.is_warm() and json.loads(cold.stamp.read_text()) == coldstart.fingerprint()
-    assert report("info") is False and cold.switched and seen == ["info"]
+    assert report(info) is False and cold.switched and seen == [info] and cold.projected is None
 
 
 def test_rerun_compiled_runs_the_same_command(tmp_path, shipped_outputs):
@@ -196,3 +199,115 @@ def test_shipped_names_and_paths_mean_one_file(tmp_path):
     mine = tmp_path / "mine.toml"
     mine.write_text(f.read_text())
     assert scenario_file(mine) == mine
+
+
+def _wait_for_stamp(folder: Path, timeout=300.0):
+    """The warm stamp the warm-up writes in ``folder`` (None if none within ``timeout`` s, or once
+    every warm-up there has ended without one)."""
+    import time
+
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        stamp = next(folder.glob("warm-*.json"), None)
+        if stamp is not None:
+            return stamp
+        locks = list(folder.glob("warm-*.lock"))
+        if locks and not any(coldstart._alive(int(x.read_text() or 0)) for x in locks if x.read_text().strip()):
+            return next(folder.glob("warm-*.json"), None)
+        time.sleep(0.5)
+    return None
+
+
+def test_first_run_from_a_clone_root_warms_the_installed_package(tmp_path, shipped_outputs):
+    """Issue 26: from a clone's root, the warm-up used to import the source tree ``./orbatt``
+    (``python -m`` puts the current folder first on sys.path) and wrote a stamp that never
+    matched the installed package: every run interpreted. Here ``./orbatt`` is a decoy that
+    cannot be imported; the warm-up must compile the installed package and the second run
+    must be compiled."""
+    root = tmp_path / "clone"
+    (root / "orbatt").mkdir(parents=True)
+    (root / "orbatt" / "__init__.py").write_text("raise ImportError('the source tree beside the run was imported')\n")
+    cache = tmp_path / "cache"
+    env = _env(NUMBA_CACHE_DIR=str(cache))
+    first = subprocess.run(["orbatt", "run", "paper-torque-free", "-o", "one.nc"], capture_output=True, text=True,
+                           env=env, cwd=root, timeout=300)
+    assert first.returncode == 0, first.stderr
+    assert "first run of this kind of scenario" in first.stderr
+    stamp = _wait_for_stamp(cache / "orbatt")
+    assert stamp is not None, "the warm-up wrote no stamp"
+    assert json.loads(stamp.read_text()) == coldstart.fingerprint()  # the installed package's, this process's
+    second = subprocess.run(["orbatt", "run", "paper-torque-free", "-o", "two.nc"], capture_output=True, text=True,
+                            env=env, cwd=root, timeout=300)
+    assert second.returncode == 0, second.stderr
+    assert "first run" not in second.stderr and "warning" not in second.stderr
+    for name in ("one.nc", "two.nc"):
+        with open_dataset(root / name) as a, open_dataset(shipped_outputs["paper-torque-free"]) as b:
+            _same_values(a, b)
+
+
+def test_warm_up_refuses_another_package(tmp_path):
+    stamp = tmp_path / "warm-k.json"
+    assert coldstart.warm_up("paper-torque-free", "", stamp, package=str(tmp_path)) == 3
+    assert not stamp.exists()
+
+
+def test_a_compiled_run_marks_its_kind_warm(tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    key = _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=str(cache))
+    assert key != "none"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    assert coldstart.mark_warm("paper-keplerian") is True  # after ORBATT_COLD_START=compile orbatt run (cli)
+    assert coldstart.mark_warm("paper-keplerian") is False  # warm already
+    assert _plan("paper-keplerian", tmp_path, NUMBA_CACHE_DIR=str(cache)) == "none"
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")
+    assert coldstart.mark_warm("paper-torque-free") is False  # an interpreted run compiled nothing
+
+
+def test_a_long_interpreted_run_waits_for_the_compiler(tmp_path):
+    from orbatt.progress import ProgressInfo
+
+    cold = coldstart.ColdStart("paper-torque-free", None, "k", tmp_path)
+    report = cold.progress(None)
+    assert report(ProgressInfo(0.5, 5.0, 10.0, 100, 1.0)) is None  # too early to project
+    assert report(ProgressInfo(0.5, 5.0, 10.0, 100, coldstart.PROJECT_AFTER_S)) is None  # projected 4 s: go on
+    assert not cold.switched and cold.projected is None
+    f = coldstart.PROJECT_AFTER_S / (2 * coldstart.LONG_RUN_S)
+    assert report(ProgressInfo(f, 1.0, 10.0, 100, coldstart.PROJECT_AFTER_S)) is False  # projected 2x too long
+    assert cold.switched and cold.projected == pytest.approx(2 * coldstart.LONG_RUN_S)
+    cold = coldstart.ColdStart("paper-torque-free", None, "k", tmp_path)
+    assert cold.progress(None)(ProgressInfo(0.0, 0.0, 10.0, 0, 10.0)) is False  # no progress at all
+    assert cold.projected == float("inf")
+
+
+KERNEL = """
+from orbatt.core._jit import jit
+
+@jit
+def twice(x):
+    return 2.0 * x
+"""
+
+
+def test_an_unreadable_cache_entry_is_recompiled(tmp_path):
+    """A truncated ``.nbi``/``.nbc`` (a full disk, a killed writer) used to make every later
+    run fail until the user deleted it: now it is removed, recompiled, and said once."""
+    (tmp_path / "kernel_mod.py").write_text(KERNEL)
+    env = _same_orbatt(_env(NUMBA_CACHE_DIR=str(tmp_path / "cache")))
+    env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), env["PYTHONPATH"]])
+    code = "import kernel_mod; print(kernel_mod.twice(1.5))"
+
+    def run():
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path,
+                           timeout=300)
+        assert r.returncode == 0, r.stderr
+        return r.stdout.strip(), r.stderr
+
+    assert run() == ("3.0", "")
+    files = list((tmp_path / "cache").rglob("*.nb[ic]"))
+    assert {f.suffix for f in files} == {".nbi", ".nbc"}
+    for f in files:
+        f.write_bytes(f.read_bytes()[:7])
+    out, err = run()
+    assert out == "3.0" and "CacheWarning" in err and "unreadable" in err and err.count("CacheWarning") == 1
+    assert run() == ("3.0", "")  # written again, readable

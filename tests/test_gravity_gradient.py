@@ -1,4 +1,4 @@
-"""The gravity-gradient potential (eq. 20, DESIGN.md §3) driven by orbit providers:
+"""The gravity-gradient potential (eq. 20, docs/design.md §3) driven by orbit providers:
 gradient vs complex step, torque vs the classical formula, the paper's Sect. 6.2 case vs
 the classical Euler-equation model, REBOUND-driven vs Kepler-driven attitude."""
 import json
@@ -211,7 +211,7 @@ def _hamiltonian_solution(orbit, y0, t_eval, rtol=3e-14):
 
 def test_paper_sect_6_2_agrees_with_the_classical_model_over_10_orbits(paper):
     q0 = Q0_PAPER / np.linalg.norm(Q0_PAPER)
-    assert abs(np.dot(q0, P0_PAPER)) == pytest.approx(9.7e-8, rel=0.01)  # DESIGN §3a item 9
+    assert abs(np.dot(q0, P0_PAPER)) == pytest.approx(9.7e-8, rel=0.01)  # docs/design.md §3a item 9
     P0 = P0_PAPER - np.dot(q0, P0_PAPER) * q0  # its tangential part (same g, same physics)
     assert np.allclose(cn.body_momentum(q0, P0), cn.body_momentum(q0, P0_PAPER), rtol=0, atol=1e-15)
     t_eval = np.linspace(0, 10 * paper.period_value, 401)

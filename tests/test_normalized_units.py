@@ -1,4 +1,4 @@
-"""Normalized (dimensionless) units end to end (issue 13 §3, DESIGN §11): a scenario in plain
+"""Normalized (dimensionless) units end to end (issue 13 §3, docs/design.md §11): a scenario in plain
 numbers throughout runs as is, lengths in the unit of ``a`` and times in the unit ``gm``
 implies; it agrees with its dimensional twin; a mix of plain and dimensional quantities is
 refused naming the first plain key."""

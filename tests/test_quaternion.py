@@ -47,7 +47,7 @@ def test_conjugate_is_anti_automorphism(a, b):
 
 @given(quats, quats)
 def test_dot_is_real_part_of_p_conj_q(a, b):
-    # DESIGN.md §3a item 1: p.q = Re(p q~), not Re(p q)
+    # docs/design.md §3a item 1: p.q = Re(p q~), not Re(p q)
     s = np.linalg.norm(a) * np.linalg.norm(b)
     assert abs(qt.dot(a, b) - qt.mul(a, qt.conj(b))[0]) <= TOL * max(1.0, s)
 

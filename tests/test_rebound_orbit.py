@@ -228,3 +228,34 @@ def test_from_elements_and_describe():
     assert d["type"] == "rebound" and d["integrator"] == "ias15" and d["perturbations"] == []
     assert d["n_samples"] == ro.samples.shape[0] and d["t_end_s"] == 600.0
     assert not ro.samples.flags.writeable
+
+
+def test_environment_torques_on_a_rebound_orbit_sampled_over_the_run_only():
+    """The environment tables sample a margin beyond the run; on a REBOUND orbit sampled over
+    the run alone the margin is cut to it (issue 26: this failed at the run's start). The
+    torques agree with the same environment on the Keplerian orbit REBOUND integrates
+    (margin kept), to the tables' end intervals and the interpolation: measured 4.4e-11
+    (drag), 1.9e-11 (magnetic), 7e-13 (gravity gradient), 4e-14 (SRP)."""
+    from orbatt import RigidBody
+    from orbatt.environment.atmosphere import PiecewiseExponentialAtmosphere
+    from orbatt.environment.magnetic import DipoleField
+    from orbatt.torques import EnvironmentTorques, Facet
+
+    kep = KeplerOrbit(6778.137 * u.km, 0.001, 51.6 * u.deg, 30 * u.deg, 0 * u.deg, epoch=EPOCH)
+    reb = ReboundOrbit(kep, 1 * u.h)
+    facets = [Facet(0.05 * u.m**2, [1.0, 0.0, 0.0], [0.05, 0.0, 0.02] * u.m, 2.2, 0.1, 0.3),
+              Facet(0.02 * u.m**2, [0.0, 0.0, -1.0], [0.0, 0.01, -0.15] * u.m, 2.2, 0.0, 0.2)]
+    kw = dict(facets=facets, drag=True, srp=True, residual_dipole=[0.01, 0.0, 0.003] * u.A * u.m**2,
+              atmosphere=PiecewiseExponentialAtmosphere(), magnetic_field=DipoleField(EPOCH))
+    env_reb = EnvironmentTorques(reb, 1 * u.h, **kw)
+    env_kep = EnvironmentTorques(kep, 1 * u.h, **kw)
+    body = RigidBody([0.04, 0.04, 0.007] * u.kg * u.m**2)
+    rng = np.random.default_rng(26)
+    t = np.concatenate([[0.0, 3600.0], rng.uniform(0.0, 3600.0, 40)])
+    q = qt.normalize(rng.normal(size=(t.size, 4)))
+    a, b = env_reb.term_torques(body, t, q), env_kep.term_torques(body, t, q)
+    assert env_reb.term_names == env_kep.term_names == ["gravity_gradient", "drag", "srp", "magnetic"]
+    for k, name in enumerate(env_reb.term_names):
+        assert np.abs(a[:, k] - b[:, k]).max() < 1e-9 * np.abs(b[:, k]).max(), name
+    with pytest.raises(InputError, match="t_end: .* outside the span .* larger t_end"):
+        EnvironmentTorques(reb, 2 * u.h, **kw)

@@ -1,4 +1,4 @@
-"""Orbits from a TLE (DESIGN.md §11): SGP4 + astropy TEME -> GCRS, sampled and interpolated;
+"""Orbits from a TLE (docs/design.md §11): SGP4 + astropy TEME -> GCRS, sampled and interpolated;
 checked against sgp4 and astropy called directly, the orbital frame of the SGP4 state, the
 gravity-gradient kernel, and bad TLEs refused naming ``tle``."""
 import subprocess
@@ -93,6 +93,26 @@ def test_epoch_defaults_to_the_tle_and_may_start_later(iss):
     assert np.abs(later.state(t)[0] - iss.state(t + later.offset)[0]).max() < 5e-4  # two interpolants
     assert abs(later.offset - 3600.0) < 1e-3
     assert abs(iss.period_value - 86400 / 15.50103472) < 1e-3
+
+
+def test_sampled_before_the_epoch_with_t_start(iss):
+    """``t_start < 0`` samples before the epoch (SGP4 propagates backwards too): the states
+    there match SGP4 + astropy; t = 0 stays a sample and the samples inside [0, t_end) are
+    those of the orbit without a margin; a positive t_start is refused naming it."""
+    wide = TleOrbit([L1, L2], 3 * u.h, t_start=-1 * u.h)
+    assert wide.time_span == (-3600.0, 10800.0) and wide.describe()["t_start_s"] == -3600.0
+    t = np.linspace(-3600.0, 10800.0, 97)
+    pos, vel = wide.state(t)
+    ref_pos, ref_vel = direct_gcrs(L1, L2, wide.epoch, t)
+    assert np.abs(pos - ref_pos).max() < 1e-3 and np.abs(vel - ref_vel).max() < 1e-4
+    ts = wide.samples[:, 0]
+    assert np.all(np.diff(ts) > 0) and 0.0 in ts
+    h = np.diff(ts)
+    assert h.max() < 1.6 * h.min()  # no sliver at either end (steps equal in E, N = 128)
+    inner = iss.samples[:, 0][iss.samples[:, 0] < 10000.0]
+    np.testing.assert_array_equal(ts[(ts >= 0.0) & (ts < 10000.0)], inner)
+    with pytest.raises(InputError, match="t_start: .* must be one time <= 0"):
+        TleOrbit([L1, L2], 3 * u.h, t_start=1 * u.s)
 
 
 def test_plugs_into_the_gravity_gradient_kernel(iss):

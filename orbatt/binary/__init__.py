@@ -1,5 +1,5 @@
 """Binary asteroids: the relative orbit and the attitudes of both bodies integrated together
-(the full two-body problem to second order, ``DESIGN.md`` §12).
+(the full two-body problem to second order, ``docs/design.md`` §12).
 
 :class:`BinarySystem` (the bodies, validated), :func:`propagate_binary` (the coupled DOP853 or
 Verner 9(8) run, impulses, contact), :func:`binary_content` / :func:`binary_dataset` (the result

@@ -1,4 +1,4 @@
-"""A binary asteroid's two bodies and their initial state, with units (``DESIGN.md`` §12).
+"""A binary asteroid's two bodies and their initial state, with units (``docs/design.md`` §12).
 
 :class:`BinarySystem` holds the masses and principal moments of the secondary (the body whose
 attitude ``(q, Q)`` orbatt always integrates) and of the primary (a point mass, or a rigid body
@@ -41,7 +41,7 @@ def body_radius(mass, inertia):
 def rtn_basis(r, v):
     """The radial, along-track and normal unit vectors (rows of a (3, 3) array, inertial) of the
     relative position ``r`` and velocity ``v``: ``o1 = r / |r|``, ``o3 = r x v / |r x v|``,
-    ``o2 = o3 x o1`` (the orbital frame of ``DESIGN.md`` §1)."""
+    ``o2 = o3 x o1`` (the orbital frame of ``docs/design.md`` §1)."""
     o1 = r / np.linalg.norm(r)
     h = np.cross(r, v)
     o3 = h / np.linalg.norm(h)

@@ -6,10 +6,19 @@ kg km^2 s^-1), or plain numbers for dimensionless scenarios.
 
 Modules: :mod:`._jit` (numba presets, intrinsics, status codes, flag names),
 :mod:`.qalg` (scalar quaternion algebra), :mod:`.kepler` and :mod:`.sampled` (orbits),
-:mod:`.potentials` (conservative terms), :mod:`.model` (the term list and the one dispatch
-on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+ :mod:`.dop853_coefficients`,
-:mod:`.dop853_lanes`) and :mod:`.splitting` (step loops); :mod:`.mutual` and
-:mod:`.mutual_splitting` (a binary asteroid: the orbit and both attitudes together, ``DESIGN.md`` §12).
+:mod:`.potentials` (conservative terms), :mod:`.torques` (flat plates, dipole, the torque ->
+generalized force map), :mod:`.environment` (densities, shadow, spline tables),
+:mod:`.control` and :mod:`.gyrostat` (control laws, reaction wheels), :mod:`.model` (the term
+list and the one dispatch on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+
+:mod:`.dop853_coefficients`, :mod:`.verner98_coefficients`, :mod:`.butcher`,
+:mod:`.dop853_lanes`) and :mod:`.splitting` (step loops), :mod:`.free_body` and
+:mod:`.carlson` (the exact torque-free body); :mod:`.mutual` and :mod:`.mutual_splitting` (a
+binary asteroid: the orbit and both attitudes together, ``docs/design.md`` §12).
+
+The equations as orbatt implements them (signs, frames, the paper's errata, the units inside
+the kernels) and the architecture are written up in ``docs/design.md`` §1, §2, §3, §3a, §4, §5,
+§10 (conventions and units, canonical variables, potentials, the paper's errata, integrators,
+orbits, torques and the environment) and §8 (the layout).
 
 The paper's equations (Arribas, Elipe & Palacios 2006) and where they are computed:
 

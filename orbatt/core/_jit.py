@@ -9,6 +9,11 @@ which the step loops catch and reject, instead of raising).
 """
 from __future__ import annotations
 
+import hashlib
+import os
+import warnings
+from pathlib import Path
+
 import numba as nb
 import numpy as np
 from numba.core import cgutils, types
@@ -17,41 +22,109 @@ from numba.core.runtime import rtsys
 from numba.extending import intrinsic
 
 
-class _LoadOnlyCache(FunctionCache):
-    """numba's disk cache of a kernel, loading without initializing the compiler.
+class _CheckedCache(FunctionCache):
+    """numba's disk cache of a kernel that survives an unreadable entry, and (where numba's
+    internals are the ones checked) loads without initializing the compiler.
 
-    numba's ``FunctionCache.load_overload`` first calls ``target_context.refresh()``, which
-    imports every lowering registry numba has (numpy, linalg, random, typed containers ...):
-    ~0.4 s of imports in each new process, needed to *compile* but not to *load* machine code
-    from the cache. Loading needs only the runtime (``rtsys.initialize``, for allocations).
-    A kernel that has to be compiled still gets the full initialization (numba's compiler
-    calls ``refresh()`` itself). Measured on a warm ``orbatt run``: 0.48 -> 0.07 s to the
-    first result of the compiled loop, bitwise the same results.
+    **Unreadable entries.** numba unpickles the index (``.nbi``) and data (``.nbc``) files as
+    they are: a truncated or corrupted file (a full disk, a killed writer, a copied cache)
+    raises in every later process, before and after compiling (saving reads the index again),
+    until the user deletes it. Here a failed load removes the kernel's index file, warns (once
+    per process, :class:`CacheWarning`, naming the first file) and returns None: numba compiles the kernel and
+    writes a fresh index (its data files are numbered anew).
+
+    **Fast loads.** numba's ``FunctionCache.load_overload`` first calls
+    ``target_context.refresh()``, which imports every lowering registry numba has (numpy,
+    linalg, random, typed containers ...): ~0.4 s of imports in each new process, needed to
+    *compile* but not to *load* machine code from the cache. Loading needs only the runtime
+    (``rtsys.initialize``, for allocations). A kernel that has to be compiled still gets the
+    full initialization (numba's compiler calls ``refresh()`` itself). Measured on a warm
+    ``orbatt run``: 0.48 -> 0.07 s to the first result of the compiled loop, bitwise the same
+    results. Used only where :data:`FAST_LOADS` holds.
     """
 
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        cache_file = getattr(self, "_cache_file", None)
+        if cache_file is not None and hasattr(cache_file, "_source_stamp"):
+            cache_file._source_stamp = (cache_file._source_stamp, core_stamp())
+
     def load_overload(self, sig, target_context):
-        rtsys.initialize(target_context)
-        with self._guard_against_spurious_io_errors():
-            return self._load_overload(sig, target_context)
+        try:
+            if not FAST_LOADS:
+                return super().load_overload(sig, target_context)
+            rtsys.initialize(target_context)
+            with self._guard_against_spurious_io_errors():
+                return self._load_overload(sig, target_context)
+        except Exception as exc:  # noqa: BLE001 - any unreadable entry: recompile instead of failing
+            self._discard(exc)
+            return None
+
+    def _discard(self, exc):
+        index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
+        if index is None:  # numba's internals differ: no file to name; disable this kernel's cache
+            self._enabled = False
+            index = "(unknown file)"
+        else:
+            try:
+                os.unlink(index)
+            except OSError:
+                self._enabled = False  # cannot remove it: compile without the cache
+        if not _DISCARDED:  # one warning per process, naming the first entry
+            warnings.warn(f"numba's compile cache entry {index} is unreadable ({type(exc).__name__}: {exc}); "
+                          "removed it (and any other unreadable entry) and compiling again", CacheWarning, stacklevel=2)
+        _DISCARDED.append(index)
+
+
+#: the unreadable cache entries this process removed
+_DISCARDED: list = []
+
+
+def core_stamp() -> str:
+    """A digest of every source file of :mod:`orbatt.core` (name, modification time, size),
+    folded into each kernel's cache stamp by :class:`_CheckedCache`.
+
+    numba keys a kernel's cache entry on its own file's stamp only, but the kernels inline
+    helpers from other files (the step loops of ``dop853.py`` inline ``model.term_value``): a
+    change to ``model.py`` alone left the loops' cached machine code in place, running the old
+    right-hand side (seen: a new term kind integrated with the old dispatch, wrong results and
+    ~10^7 tiny steps, until the cache was deleted). With the digest, a change to any file of
+    the package's kernels recompiles them all."""
+    global _CORE_STAMP
+    if _CORE_STAMP is None:
+        h = hashlib.sha1()
+        for f in sorted(Path(__file__).resolve().parent.glob("*.py")):
+            st = f.stat()
+            h.update(f"{f.name}:{st.st_mtime_ns}:{st.st_size};".encode())
+        _CORE_STAMP = h.hexdigest()
+    return _CORE_STAMP
+
+
+_CORE_STAMP = None
+
+
+class CacheWarning(RuntimeWarning):
+    """An unreadable entry of numba's disk cache was removed and its kernel recompiled."""
 
 
 def _preset(**options):
-    """An ``njit`` decorator with ``options`` whose dispatchers cache on disk and load from
-    the cache without initializing numba's compiler (:class:`_LoadOnlyCache`; numba's own
-    cache where its internals differ)."""
+    """An ``njit`` decorator with ``options`` whose dispatchers cache on disk through
+    :class:`_CheckedCache` (numba's own cache where its cache class is not the one checked)."""
     decorate = nb.njit(cache=True, error_model="numpy", **options)
 
     def apply(func):
         dispatcher = decorate(func)
-        if type(getattr(dispatcher, "_cache", None)) is FunctionCache and _FAST_LOADS:
-            dispatcher._cache = _LoadOnlyCache(dispatcher.py_func)
+        if type(getattr(dispatcher, "_cache", None)) is FunctionCache:
+            dispatcher._cache = _CheckedCache(dispatcher.py_func)
         return dispatcher
 
     return apply
 
 
-#: the numba internals :class:`_LoadOnlyCache` relies on are there (checked with numba 0.68)
-_FAST_LOADS = all(hasattr(FunctionCache, name) for name in ("_load_overload", "_guard_against_spurious_io_errors"))
+#: the numba internals the fast loads of :class:`_CheckedCache` rely on are there (checked
+#: with numba 0.68); ``ORBATT_FAST_LOADS=0`` turns them off
+FAST_LOADS = (all(hasattr(FunctionCache, name) for name in ("_load_overload", "_guard_against_spurious_io_errors"))
+              and os.environ.get("ORBATT_FAST_LOADS", "1") != "0")
 
 #: a compiled kernel (cached on disk)
 jit = _preset()

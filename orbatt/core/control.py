@@ -1,4 +1,4 @@
-"""Attitude control laws and reaction wheels on plain floats (``DESIGN.md`` §10).
+"""Attitude control laws and reaction wheels on plain floats (``docs/design.md`` §10).
 
 Units are the caller's consistent system (orbatt's internal kg, km, s, rad: torques in
 kg km^2 s^-2 = 1e6 N m, dipoles in 1e-6 A m^2 so that ``m x B`` with ``B`` in T is such a
@@ -19,7 +19,7 @@ Parameter layouts (rows of the term list, :mod:`orbatt.core.model`)
 The PD law (``q_e = q_t~ q``, ``tau = -kp sgn(q_e0) Im(q_e) - kd (omega - omega_t)``, each
 axis clipped to ``tau_max``) with the targets:
 
-* ``orbital``: ``q_t = p c``, the orbital frame O of the orbit's ``(r, v)`` (``DESIGN.md`` §1)
+* ``orbital``: ``q_t = p c``, the orbital frame O of the orbit's ``(r, v)`` (``docs/design.md`` §1)
   turned by the constant offset ``c`` (identity: hold O itself), and ``omega_t = (r x v) / r^2``
   in body axes: O's rate about its normal, which the offset frame shares (exact for a Keplerian
   orbit; its component along ``o1``, from an acceleration off the orbit plane, is left out:

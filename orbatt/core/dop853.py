@@ -41,7 +41,7 @@ side's third derivative jumps; nothing is recorded there.
 
 Output: the integrator lands exactly on every requested output time (the step before it is
 shortened, the step size proposed before shortening is kept for the step after), so outputs
-carry the full accuracy of step-end values - no interpolation (``DESIGN.md`` §4).
+carry the full accuracy of step-end values - no interpolation (``docs/design.md`` §4).
 Alternatively every accepted step is recorded (``record_all``).
 
 Resumable: the whole integrator state lives in small per-trajectory arrays (``y``, ``st``,

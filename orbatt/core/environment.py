@@ -1,5 +1,5 @@
 """Environment kernels on plain floats: exponential densities, the shadow function and the
-cubic-spline tables of the fields sampled along the orbit (``DESIGN.md`` §10).
+cubic-spline tables of the fields sampled along the orbit (``docs/design.md`` §10).
 
 Units: km for lengths, s for times, kg/m^3 for densities (the table's units for anything
 else). Vectors are 3-sequences of floats (tuples or 1-D arrays). The API counterparts, which

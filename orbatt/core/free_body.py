@@ -17,7 +17,7 @@ the constants of a member's motion once (:func:`motion`, into a row of ``NC`` fl
 that next to the separatrix, where the backward form is needed).
 
 Units: plain float64 in the body's consistent internal units (moments, momenta, time);
-``y = (q, Q)`` scalar-first quaternions, ``q`` body -> inertial, ``Q = 2 q g`` (``DESIGN.md``).
+``y = (q, Q)`` scalar-first quaternions, ``q`` body -> inertial, ``Q = 2 q g`` (``docs/design.md`` §1-2).
 """
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The extended right-hand side: reaction wheels (the body as a gyrostat) and control laws in
-the canonical variables (``DESIGN.md`` §10).
+the canonical variables (``docs/design.md`` §10).
 
 State ``y = (q, Q, h_1 .. h_n)``: ``h_k`` the axial angular momentum of wheel ``k`` (absolute:
 ``h_k = Iw_k (a_k . omega + speed_k)``, ``speed_k`` the rotor's rate relative to the body).

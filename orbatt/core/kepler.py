@@ -12,7 +12,7 @@ inertial ``S`` components. Build ``orb`` with :func:`orbit_vector`, which fills 
 entries; a 7-entry vector is still accepted by the kernels (they then recompute ``P, Q``
 at every call, which costs six more trigonometric calls).
 
-Frames follow ``DESIGN.md`` §1: the orbital frame ``O`` has ``o1`` radial, ``o3`` along
+Frames follow ``docs/design.md`` §1: the orbital frame ``O`` has ``o1`` radial, ``o3`` along
 ``r x v``, and the orbital quaternion ``p`` (3-1-3 Euler parameters of
 ``(raan, inc, u = argp + f)``) maps ``O`` components to inertial ``S`` components.
 

@@ -1,4 +1,4 @@
-"""The term list: what acts on the body, evaluated in one loop (``DESIGN.md`` §10).
+"""The term list: what acts on the body, evaluated in one loop (``docs/design.md`` §10).
 
 The right-hand side of eq. (7) is the kinetic part plus the sum of the terms acting on the
 body. This module is the **only** place that dispatches on term kinds; the step loops of
@@ -47,6 +47,8 @@ reaction wheels        6     :func:`orbatt.core.control.wheel_params` (the body 
 PD control             7     :func:`orbatt.core.control.pd_params`; table: the Sun's position
                              (``target = sun``)
 B-dot control          8     ``[gain, max dipole]``; table: the field ``B`` (inertial)
+constant body torque   9     ``[tau1, tau2, tau3]`` (body axes): thruster misalignment,
+                             outgassing; reads nothing (a torque: ``G = -2 q (0, tau)``)
 =====================  ====  =====================================================================
 
 The last three are the **extended** kinds (:data:`EXTENDED_KINDS`): a model holding one gets
@@ -57,7 +59,7 @@ those of the other terms.
 
 Every term contributes ``(U, G)``: its potential and its generalized gradient, so that the
 momentum equation reads ``dQ/dt = 1/4 Q a - sum G`` (:mod:`orbatt.core.hamiltonian`).
-Conservative terms give the tangential gradient of their potential (``DESIGN.md`` §2). The
+Conservative terms give the tangential gradient of their potential (``docs/design.md`` §2). The
 sum starts from the first term's value (not from zero), so a model of one term gives exactly
 the numbers of that term alone.
 
@@ -84,6 +86,7 @@ from ._jit import jit, jit_inline
 from . import environment as env
 from . import potentials as pot
 from . import torques as trq
+from .kinds import KINDS, codes_where
 from .kepler import ORB_SIZE, anomaly_of_time, kepler_anomaly, kepler_radial, kepler_state, time_of_anomaly
 from .sampled import TABLE_COLUMNS, sampled_radial, sampled_state
 
@@ -92,7 +95,8 @@ ORBIT_NONE = 0
 ORBIT_KEPLER = 1
 ORBIT_SAMPLED = 2
 ORBIT_KEPLER_ANOMALY = 3
-# term kinds (rows 1..n)
+# term kinds (rows 1..n): the codes of :data:`orbatt.core.kinds.KINDS` (described there,
+# once), as the module constants the compiled if-chains compare with
 HEAVY_TOP = 1
 GRAVITY_GRADIENT = 2
 DRAG = 3
@@ -101,10 +105,9 @@ MAGNETIC = 5
 WHEELS = 6
 PD_CONTROL = 7
 BDOT_CONTROL = 8
+CONSTANT_TORQUE = 9
 #: what each term kind is, in words (error messages: a method refusing the terms that act)
-KIND_DESCRIPTIONS = {HEAVY_TOP: "a heavy top", GRAVITY_GRADIENT: "the gravity gradient", DRAG: "aerodynamic drag",
-                     SRP: "solar radiation pressure", MAGNETIC: "a magnetic dipole", WHEELS: "reaction wheels",
-                     PD_CONTROL: "a PD control law", BDOT_CONTROL: "a B-dot control law"}
+KIND_DESCRIPTIONS = {k.code: k.description for k in KINDS}
 
 #: columns of a ``terms`` row
 KIND, P0, P1, R0, R1, FLAGS = 0, 1, 2, 3, 4, 5
@@ -115,14 +118,14 @@ NEEDS_VELOCITY = 1
 #: right-hand side of :mod:`orbatt.core.gyrostat`)
 EXTENDED = 2
 #: the kinds that make a model extended: they read the body rate (and the wheels' momenta)
-EXTENDED_KINDS = frozenset({WHEELS, PD_CONTROL, BDOT_CONTROL})
+EXTENDED_KINDS = codes_where("extended")
 
 #: terms that read the orbit, those that read its velocity, and those with a table of their
 #: own (an environment field sampled along the orbit; the row's ``FLAGS`` column holds the
-#: slot of ``work`` that keeps its interval)
-ORBIT_TERMS = frozenset({GRAVITY_GRADIENT, DRAG, SRP, MAGNETIC, BDOT_CONTROL})
-VELOCITY_TERMS = frozenset({DRAG, PD_CONTROL})
-TABLE_TERMS = frozenset({DRAG, SRP, MAGNETIC, BDOT_CONTROL})
+#: slot of ``work`` that keeps its interval; a PD law's table is optional)
+ORBIT_TERMS = codes_where("orbit")
+VELOCITY_TERMS = codes_where("velocity")
+TABLE_TERMS = codes_where("table")
 #: the first slot of ``work`` given to tables (0..2: Kepler's warm start, 3: the sampled
 #: orbit); :data:`orbatt.core.potentials.WORK_SIZE` bounds the number of table terms
 FIRST_TABLE_SLOT = 4
@@ -288,19 +291,21 @@ def term_value(kind, p0, c, q, inertia, params):
         return pot.gravity_gradient(q, inertia, c[0], (c[1], c[2], c[3]))
     elif kind == HEAVY_TOP:
         return pot.heavy_top(q, c)
-    elif kind == DRAG or kind == SRP or kind == MAGNETIC:
+    elif kind == DRAG or kind == SRP or kind == MAGNETIC or kind == CONSTANT_TORQUE:
         return 0.0, _environment_gradient(kind, c, q, params, p0)
     return 0.0, (0.0, 0.0, 0.0, 0.0)
 
 
 @jit
 def _environment_gradient(kind, c, q, params, p0):
-    """:func:`term_value` of the environment terms (compiled once and called, as
-    :func:`_environment_constants`): ``G = -2 q (0, tau)``."""
+    """:func:`term_value` of the torque terms (drag, SRP, magnetic, constant; compiled once
+    and called, as :func:`_environment_constants`): ``G = -2 q (0, tau)``."""
     if kind == DRAG:
         tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 1]))
     elif kind == SRP:
         tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
+    elif kind == CONSTANT_TORQUE:
+        tau = (params[p0], params[p0 + 1], params[p0 + 2])
     else:
         tau = trq.dipole_torque(q, (params[p0], params[p0 + 1], params[p0 + 2]), (c[0], c[1], c[2]))
     return trq.gradient_of_torque(q, tau)

@@ -1,10 +1,10 @@
 """The full two-body problem to second order (a binary asteroid): the relative orbit and the
-attitudes of both bodies integrated together (``DESIGN.md`` §12).
+attitudes of both bodies integrated together (``docs/design.md`` §12).
 
 Bodies: the primary (mass ``M1``, principal moments ``I1``, attitude ``q1``) and the secondary
 (``M2``, ``I2``, attitude ``q``); ``r`` the relative position primary -> secondary in the
 inertial frame ``S``, ``mu = M1 M2 / (M1 + M2)`` the reduced mass, ``p = mu dr/dt``. The
-attitudes are the canonical pairs of ``DESIGN.md`` §2 (``q`` body -> inertial, scalar first,
+attitudes are the canonical pairs of ``docs/design.md`` §2 (``q`` body -> inertial, scalar first,
 ``Q = 2 q g``, ``g`` the body-axes angular momentum).
 
 Mutual potential (MacCullagh on both bodies; the secondary's term is eq. 20)::

@@ -1,4 +1,4 @@
-"""Symplectic splitting of the coupled binary (``DESIGN.md`` §12): ``H = T + U`` with
+"""Symplectic splitting of the coupled binary (``docs/design.md`` §12): ``H = T + U`` with
 ``T = |p|^2 / (2 mu) + T2(q, Q) + T1(q1, Q1)`` and ``U`` the mutual potential of
 :mod:`orbatt.core.mutual`.
 

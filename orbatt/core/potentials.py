@@ -1,7 +1,7 @@
 """Conservative terms: potentials ``U(q, t)`` and their tangential gradients (compiled, no
 units), and the body torque of a gradient.
 
-Every potential is extended off the unit sphere as a function of ``q/|q|`` (``DESIGN.md``
+Every potential is extended off the unit sphere as a function of ``q/|q|`` (``docs/design.md``
 §2): for a raw formula ``U_raw`` homogeneous of degree ``k`` in ``q``,
 ``U(q) = U_raw(q) / |q|^k`` and ``dU/dq = (grad U_raw - (q.grad U_raw) q / |q|^2) / |q|^k``.
 With this gradient ``|q| = 1`` and ``q.Q = 0`` are invariants of Hamilton's equations.

@@ -2,7 +2,7 @@
 
 Quaternions here are 4-tuples of floats ``(q0, q1, q2, q3)``, scalar first; 3-vectors are
 3-tuples. Tuples live in registers inside numba, so these kernels allocate nothing. The
-conventions are those of :mod:`orbatt.quaternion` (and ``DESIGN.md`` §1); the vectorized,
+conventions are those of :mod:`orbatt.quaternion` (and ``docs/design.md`` §1); the vectorized,
 public, numpy versions are in that module and are tested against these.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Compiled fixed-step integrators: symplectic splitting of ``H = T + U`` (``DESIGN.md`` §4)
+"""Compiled fixed-step integrators: symplectic splitting of ``H = T + U`` (``docs/design.md`` §4)
 and, for comparison, the classical Runge-Kutta 4; whole step loop in numba, one trajectory
 (:func:`advance`) or an ensemble in parallel (:func:`advance_lanes`).
 

@@ -1,5 +1,5 @@
 """Non-conservative body torques of flat plates (facets) and of a magnetic dipole (compiled,
-no units; ``DESIGN.md`` §10).
+no units; ``docs/design.md`` §10).
 
 A torque ``tau`` (body axes) enters Hamilton's equations as ``dQ/dt += 2 q (0, tau)``; in the
 term list (:mod:`orbatt.core.model`) every term contributes a generalized gradient ``G``

@@ -4,8 +4,8 @@
 ``ds.orbatt`` accessor (:mod:`~orbatt.dataset.accessor`),
 quick plots (:mod:`~orbatt.dataset.plots`) and CCSDS AEM files (:mod:`~orbatt.dataset.aem`).
 
-Layout (``DESIGN.md`` §6)
--------------------------
+Layout (``docs/design.md`` §6)
+------------------------------
 Dimensions and their coordinates (every coordinate is numeric, as CF requires of coordinate
 variables; the names are in a label coordinate beside it):
 
@@ -25,7 +25,7 @@ The quaternion index matches the paper's subscripts (``q.sel(quat=0)`` is ``q0``
 index matches ``I1, I2, I3`` and ``g1, g2, g3``: ``q.sel(quat=k)`` and ``g.sel(axis=k)`` refer
 to the same body axis ``k``.
 
-Frames (``DESIGN.md`` §1): ``S`` inertial (space), ``B`` body principal axes, ``O`` orbital
+Frames (``docs/design.md`` §1): ``S`` inertial (space), ``B`` body principal axes, ``O`` orbital
 (``o1`` radial outwards, ``o3`` along ``r x v``, ``o2 = o3 x o1``). Quaternion variables carry
 ``quaternion_order = "w x y z"`` and ``frames = "B relative to S"`` (the rotation that turns the
 ``S`` axes into the ``B`` axes, ``x_S = q x_B q~``); vector variables carry ``frame``, the frame

@@ -5,7 +5,7 @@ version 2.0). Such files feed Orekit, GMAT and STK.
 
 How orbatt's ``q`` maps onto an AEM quaternion
 ----------------------------------------------
-orbatt's attitude ``q`` (``DESIGN.md`` §1) maps body components to space components,
+orbatt's attitude ``q`` (``docs/design.md`` §1) maps body components to space components,
 ``x_S = q x_B q~``; equivalently it is the rotation by an angle ``a`` about a unit axis ``e``
 that turns the ``S`` axes into the ``B`` axes, ``q = (cos a/2, e sin a/2)``: the attitude of
 ``B`` relative to ``S``.

@@ -1,4 +1,4 @@
-"""The environment along a prescribed orbit (``DESIGN.md`` §10): frames, atmosphere,
+"""The environment along a prescribed orbit (``docs/design.md`` §10): frames, atmosphere,
 geomagnetic field, Sun and shadow, and the sampled tables the compiled kernel interpolates.
 
 Units at the boundary: astropy ``Time`` instants and GCRS positions in km in; plain float

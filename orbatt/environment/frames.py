@@ -1,7 +1,7 @@
 """Earth-fixed frames and geodetic coordinates along an orbit, through astropy.
 
 orbatt's inertial frame ``S`` is astropy's ``GCRS`` (geocentric) whenever an epoch is given
-(``DESIGN.md`` §11); the field libraries want Earth-fixed coordinates (``ITRS``) or geodetic
+(``docs/design.md`` §11); the field libraries want Earth-fixed coordinates (``ITRS``) or geodetic
 ones (WGS84). Every function here takes the instants as an astropy ``Time`` array ``t`` of
 shape ``(N,)`` (or a scalar ``Time``, used for every row) and vectors as float arrays
 ``(N, 3)`` in km (positions) or any unit (free vectors such as a magnetic field).

@@ -1,7 +1,7 @@
 """Environment tables: fields sampled along the prescribed orbit and splined for the kernel.
 
 The orbit is prescribed, so density, magnetic field and Sun position depend on time alone
-along it (``DESIGN.md`` §10). They are evaluated by their libraries at evenly spaced
+along it (``docs/design.md`` §10). They are evaluated by their libraries at evenly spaced
 samples (:func:`sample_along_orbit`) and turned into per-interval cubic polynomials
 (:func:`spline_table`, scipy's not-a-knot ``CubicSpline``) that
 :func:`orbatt.core.environment.spline_eval` evaluates in the compiled right-hand side.

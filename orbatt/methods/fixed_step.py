@@ -97,7 +97,7 @@ class Splitting(FixedStep):
 
     composition = "strang"
     symplectic = True
-    options = {"kinetic": "decomposition of T: 'axes' (T1+T2+T3, DESIGN.md §4), 'shifted' (|g|^2/2I_mid + two "
+    options = {"kinetic": "decomposition of T: 'axes' (T1+T2+T3, docs/design.md §4), 'shifted' (|g|^2/2I_mid + two "
                           "axis terms), or 'auto' (default: 'shifted' without a potential, 'axes' otherwise)"}
 
     def __init__(self, **kw):

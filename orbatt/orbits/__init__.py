@@ -1,4 +1,4 @@
-"""Orbit providers (``DESIGN.md`` §5): the orbit that drives the gravity-gradient torque.
+"""Orbit providers (``docs/design.md`` §5): the orbit that drives the gravity-gradient torque.
 
 * :class:`KeplerOrbit` - an elliptic Keplerian orbit (compiled Kepler solve);
 * :class:`ReboundOrbit` - the orbit integrated by REBOUND (optionally J2, Moon, Sun),

@@ -1,4 +1,4 @@
-"""The orbit-provider contract (``DESIGN.md`` §5) and helpers shared by the providers."""
+"""The orbit-provider contract (``docs/design.md`` §5) and helpers shared by the providers."""
 from __future__ import annotations
 
 import warnings
@@ -26,7 +26,7 @@ class PeriapsisWarning(UserWarning):
 
 class OrbitProvider:
     """Base class of orbit providers: the contract the potentials, integrators and the
-    Dataset builder rely on (``DESIGN.md`` §1, §5).
+    Dataset builder rely on (``docs/design.md`` §1, §5).
 
     Times ``t`` are seconds since the orbit's epoch: float arrays of any shape (an astropy
     time Quantity is also accepted and converted); results have shape ``t.shape`` (+ the

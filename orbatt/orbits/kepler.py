@@ -34,7 +34,7 @@ def _mean_from_eccentric(E, e):
 
 
 class KeplerOrbit(OrbitProvider):
-    """An elliptic Keplerian orbit about a point mass (``DESIGN.md`` §1, §5).
+    """An elliptic Keplerian orbit about a point mass (``docs/design.md`` §1, §5).
 
     Parameters
     ----------

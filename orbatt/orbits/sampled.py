@@ -1,4 +1,4 @@
-"""Orbits known by samples (``DESIGN.md`` §5, §11): the evaluation shared by the providers
+"""Orbits known by samples (``docs/design.md`` §5, §11): the evaluation shared by the providers
 that sample an orbit once and interpolate it (:class:`~orbatt.orbits.ReboundOrbit`,
 :class:`~orbatt.orbits.TleOrbit`) with the compiled quintic Hermite polynomial of
 :mod:`orbatt.core.sampled`."""

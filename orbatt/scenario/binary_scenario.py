@@ -22,7 +22,7 @@ __all__ = ["BinaryScenario"]
 
 
 def _orbital_frame_quaternion(r, v):
-    """``p``: the orbital frame ``O`` -> inertial (columns o1, o2, o3 of ``DESIGN.md`` §1)."""
+    """``p``: the orbital frame ``O`` -> inertial (columns o1, o2, o3 of ``docs/design.md`` §1)."""
     return qt.from_matrix(rtn_basis(r, v).T)
 
 

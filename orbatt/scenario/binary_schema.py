@@ -1,4 +1,4 @@
-"""Scenario files of binary asteroids: ``[orbit] provider = "coupled"`` (``DESIGN.md`` §12).
+"""Scenario files of binary asteroids: ``[orbit] provider = "coupled"`` (``docs/design.md`` §12).
 
 The relative orbit (primary -> secondary) is integrated with the attitudes. Schema (keys
 not listed are refused; quantities carry units, dimensional scenarios only)::

@@ -21,10 +21,11 @@ from ..potentials import GravityGradient, HeavyTop, TorqueFree
 from ..environment.atmosphere import NRLMSIS, ExponentialAtmosphere, PiecewiseExponentialAtmosphere
 from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
-from ..torques import EnvironmentTorques
+from ..torques import EnvironmentTorques, sample_margin
 from ..orbital import state_from_orbital
 
-__all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "tle_period", "build_potential",
+__all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
+           "build_potential",
            "build_environment_torques", "build_control", "build_initial_state",
            "build_output_times", "check_work", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
@@ -83,13 +84,29 @@ def tle_period(o):
     return 2.0 * math.pi / (sat.no_kozai / 60.0)
 
 
-def build_tle_orbit(ctx, o, t_end):
+def build_tle_orbit(ctx, o, t_end, margin=0.0):
     """The :class:`~orbatt.orbits.TleOrbit` of a validated ``[orbit]`` table over
-    ``[0, t_end]`` (s); an SGP4 failure along the span (a decayed orbit) names ``tle``."""
+    ``[-margin, t_end + margin]`` (s): ``margin`` is :func:`environment_margin`'s, the span
+    the environment tables sample beyond the run. An SGP4 failure along the span (a decayed
+    orbit) names ``tle``."""
     try:
-        return TleOrbit(o["tle"], t_end * U.TIME, epoch=o["epoch"])
+        return TleOrbit(o["tle"], (t_end + margin) * U.TIME, epoch=o["epoch"], t_start=-margin * U.TIME)
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
+
+
+def environment_margin(spec):
+    """How far (s) before ``t = 0`` and after ``t_end`` the environment tables of ``spec``'s
+    ``[torques]`` and ``[control]`` sample the orbit (:func:`orbatt.torques.sample_margin`;
+    0 without them): a TLE orbit is sampled over that margin too."""
+    tq, c = spec.torques, spec.control
+    if tq is None and (c is None or c["control"] is None):
+        return 0.0
+    law = None if c is None else c["control"]
+    return sample_margin(drag=tq is not None and tq["drag"], srp=tq is not None and tq["srp"],
+                         magnetic=(tq is not None and tq["residual_dipole"] is not None)
+                         or (c is not None and c["magnetic_field"] is not None),
+                         sun=getattr(law, "target", None) == "sun")
 
 
 def build_output_times(ctx, integration, period):
@@ -133,9 +150,12 @@ def build_environment_torques(spec, orbit, t_end):
     control = None if spec.control is None else spec.control["control"]
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    return EnvironmentTorques(orbit, t_end * u.s, facets=tq["facets"], gravity_gradient=True, drag=tq["drag"],
-                              srp=tq["srp"], residual_dipole=dipole, atmosphere=atmosphere, magnetic_field=field,
-                              shadow=env["shadow"], corotation=env["corotation"], control=control)
+    constant = None if tq.get("constant") is None else tq["constant"] * u.N * u.m
+    gg = spec.potential_kind == "gravity-gradient"
+    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=tq["facets"],
+                              gravity_gradient=gg, drag=tq["drag"], srp=tq["srp"], residual_dipole=dipole,
+                              atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
+                              corotation=env["corotation"], control=control, constant_torque=constant)
 
 
 def build_control(spec, orbit, t_end):

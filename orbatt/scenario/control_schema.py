@@ -1,4 +1,4 @@
-"""The scenario tables of attitude control and reaction wheels (issue 12, ``DESIGN.md`` §10):
+"""The scenario tables of attitude control and reaction wheels (issue 12, ``docs/design.md`` §10):
 ``[control]`` and ``[[body.wheels]]``.
 
 ```toml

@@ -15,7 +15,7 @@ from .. import units as U
 from ..body import RigidBody
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
-                    build_rebound_orbit, build_tle_orbit, check_work, tle_period)
+                    build_rebound_orbit, build_tle_orbit, check_work, environment_margin, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
 from .binary_schema import BinarySpec
@@ -79,7 +79,7 @@ class Scenario:
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
         check_work(ctx, self.t_end, period)  # the orbit alone, before REBOUND samples it
         if provider == "tle":
-            self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]))
+            self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]), environment_margin(spec))
         elif spec.orbit is not None:
             self.orbit = (kepler if provider == "kepler"
                           else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))

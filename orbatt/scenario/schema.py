@@ -131,7 +131,7 @@ law          'pd' | 'bdot'                   required               quaternion P
                                                                     magnetorquers
 target       'orbital' | 'inertial' | 'sun'  'orbital'              pd: hold the orbital frame (q_orbital -> 1), the
                                                                     attitude target_q, or point target_axis at the
-                                                                    Sun (needs [orbit] epoch)
+                                                                    Sun (needs an epoch: [orbit] epoch or a TLE's)
 target_q     plain, 4 values                 required for inertial  pd: target attitude [w, x, y, z], body ->
                                                                     inertial; with target = 'orbital' (optional) the
                                                                     held attitude relative to the orbital frame
@@ -157,8 +157,11 @@ diffuse           plain in [0, 1]   0         diffuse reflectivity (SRP)
 [torques]
 drag             true | false                      false  aerodynamic drag of the facets (needs [[body.facets]])
 srp              true | false                      false  solar radiation pressure on the facets (needs facets and
-                                                          [orbit] epoch)
+                                                          an epoch: [orbit] epoch or a TLE's)
 residual_dipole  magnetic moment (A m2), 3 values  none   the body's dipole m: torque m x B (body axes)
+constant         torque (N m), 3 values            none   a constant body torque (body axes: thruster
+                                                          misalignment, outgassing); needs no orbit (also with
+                                                          kind = 'torque-free')
 
 [environment]
 atmosphere      'exponential' | 'nrlmsis' | 'none'  'exponential' with drag        density model (NRLMSIS 2.1 through
@@ -211,7 +214,8 @@ raan           angle                          required (not tle)    right ascens
 argp           angle                          required (not tle)    argument of periapsis
 true_anomaly   angle                          one of the two        true anomaly at t = 0
 mean_anomaly   angle                          one of the two        mean anomaly at t = 0
-epoch          ISO time (UTC)                 none; tle: the TLE's  the instant t = 0 (CF time axis, third bodies)
+epoch          ISO time (UTC)                 none; tle: the TLE's  the instant t = 0 (CF time axis, third bodies; the
+                                                                    date of the Sun, NRLMSIS and the magnetic field)
 perturbations  list of 'j2' | 'moon' | 'sun'  []                    rebound: forces besides the central point mass
 integrator     'ias15' | 'whfast'             'ias15'               rebound: the REBOUND integrator
 tle            2 text lines                   one of tle, tle_file  tle: the two-line element set
@@ -463,8 +467,8 @@ def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
 def _parse_tle_orbit(ctx, o, source):
     """``[orbit] provider = "tle"``: the two lines (``tle``) or a file (``tle_file``, relative
     to the scenario file), checked here (:func:`orbatt.orbits.tle.parse_tle`); an optional
-    ``epoch`` (default: the TLE's)."""
-    from ..orbits.tle import parse_tle, read_tle_file
+    ``epoch`` (default: the TLE's, which ``epoch`` holds then)."""
+    from ..orbits.tle import parse_tle, read_tle_file, tle_epoch
 
     extra = sorted(set(o) - TLE_KEYS)
     if extra:
@@ -484,7 +488,9 @@ def _parse_tle_orbit(ctx, o, source):
     except InputError as exc:
         raise ctx.error("[orbit]", str(exc)) from None
     out = {"provider": "tle", "tle": lines, "central_body": "earth", "gm": None}
-    out["epoch"] = None
+    # the TLE's own epoch unless [orbit] epoch moves t = 0: what the environment and the
+    # control laws read (NRLMSIS, IGRF, the Sun), like a Keplerian orbit's epoch
+    out["epoch"] = tle_epoch(lines[-2], lines[-1])
     if "epoch" in o:
         try:
             out["epoch"] = parse_epoch(str(o["epoch"]))

@@ -1,4 +1,4 @@
-"""The scenario tables of the environment torques (issue 11, ``DESIGN.md`` §10):
+"""The scenario tables of the environment torques (issue 11, ``docs/design.md`` §10):
 ``[[body.facets]]``, ``[torques]`` and ``[environment]``.
 
 ```toml
@@ -14,6 +14,7 @@ diffuse = 0.3
 drag = true                     # default false; needs facets
 srp = true                      # default false; needs facets and an [orbit] epoch
 residual_dipole = ["0.005 A m2", "0 A m2", "0.002 A m2"]   # magnetic torque m x B (body axes)
+constant = ["1e-7 N m", "0 N m", "-2e-7 N m"]   # a constant body torque (body axes; no orbit needed)
 
 [environment]
 atmosphere = "exponential"      # | "nrlmsis" | "none"   (default "exponential" when drag = true)
@@ -28,7 +29,8 @@ magnetic_field = "igrf"         # | "dipole" | "none"  (default "igrf" with a re
 shadow = "conical"              # | "cylindrical" | "none" (default "conical")
 ```
 The torques act with ``[potential] kind = "gravity-gradient"`` (the term that brings the
-orbit); IGRF, the dipole, NRLMSIS and SRP need the orbit's epoch.
+orbit); IGRF, the dipole, NRLMSIS and SRP need the orbit's epoch. A ``constant`` torque alone
+reads no orbit: it acts with ``kind = "torque-free"`` too.
 """
 from __future__ import annotations
 
@@ -43,7 +45,7 @@ from .fields import parse_choice, parse_quantity, parse_vector
 __all__ = ["FACET_KEYS", "TORQUE_KEYS", "ENVIRONMENT_KEYS", "parse_torques"]
 
 FACET_KEYS = {"area", "normal", "position", "drag_coefficient", "specular", "diffuse"}
-TORQUE_KEYS = {"drag", "srp", "residual_dipole"}
+TORQUE_KEYS = {"drag", "srp", "residual_dipole", "constant"}
 ENVIRONMENT_KEYS = {"atmosphere", "density0", "altitude0", "scale_height", "corotation", "f107", "f107a", "ap",
                     "magnetic_field", "shadow"}
 ATMOSPHERES = ("exponential", "nrlmsis", "none")
@@ -92,7 +94,7 @@ def _facets(ctx, raw):
 def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     """The torque settings of a scenario (``None`` without ``[torques]``): a dict of
     ``facets`` (list of :class:`~orbatt.torques.Facet`), ``drag``, ``srp``, ``residual_dipole``
-    (A m^2 or None) and ``environment`` (the models' settings, SI floats); raises
+    (A m^2 or None), ``constant`` (N m or None) and ``environment`` (the models' settings, SI floats); raises
     :class:`~orbatt.scenario.ScenarioError` naming the key. ``bdot``: a B-dot law reads
     ``[environment] magnetic_field`` (:mod:`orbatt.scenario.control_schema`)."""
     body = data.get("body", {})
@@ -116,9 +118,16 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     for key in env:
         if key not in ENVIRONMENT_KEYS:
             raise ctx.error(f"[environment] {key}", f"unknown key; allowed: {', '.join(sorted(ENVIRONMENT_KEYS))}")
-    if potential_kind != "gravity-gradient" or orbit is None:
+    orbit_free = set(tq) <= {"constant"} and not env and not facets and not bdot
+    if orbit_free and potential_kind not in ("gravity-gradient", "torque-free"):
+        raise ctx.error("[torques] constant", f"acts with [potential] kind = 'torque-free' or 'gravity-gradient' (this "
+                                              f"scenario is {potential_kind!r})")
+    if not orbit_free and (potential_kind != "gravity-gradient" or orbit is None):
         raise ctx.error("[torques]", f"the torques need an orbit: use [potential] kind = 'gravity-gradient' with an "
-                                     f"[orbit] (this scenario is {potential_kind!r})")
+                                     f"[orbit] (this scenario is {potential_kind!r}); only 'constant' needs none")
+    constant = None
+    if "constant" in tq:
+        constant = parse_vector(ctx, "[torques] constant", tq["constant"], 3, u.N * u.m, dimensionless=False)
     drag = _bool(ctx, "[torques] drag", tq.get("drag", False))
     srp = _bool(ctx, "[torques] srp", tq.get("srp", False))
     dipole = None
@@ -128,7 +137,7 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     for name, on in (("drag", drag), ("srp", srp)):
         if on and not facets:
             raise ctx.error(f"[torques] {name}", "needs the body's flat plates: add [[body.facets]] tables")
-    epoch = orbit.get("epoch")
+    epoch = None if orbit is None else orbit.get("epoch")
     atmosphere = parse_choice(ctx, "[environment] atmosphere", env.get("atmosphere", "exponential" if drag else "none"),
                               ATMOSPHERES)
     if drag and atmosphere == "none":
@@ -177,4 +186,5 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     if srp and epoch is None:
         raise ctx.error("[orbit] epoch", "missing; SRP needs the date to place the Sun (give [orbit] epoch)")
     out_env["magnetic_field"] = field
-    return {"facets": facets, "drag": drag, "srp": srp, "residual_dipole": dipole, "environment": out_env}
+    return {"facets": facets, "drag": drag, "srp": srp, "residual_dipole": dipole, "constant": constant,
+            "environment": out_env}

@@ -5,7 +5,7 @@ each group is **one ensemble call** of :func:`orbatt.propagate`. Every per-case 
 (initial state, pointing error, energy) is computed per case - elementwise, with sums over
 the last axis written out - never through BLAS or a reduction across cases: a member's
 result must not depend on how many members share the call, nor on the CPU (issue 14).
-Quantities are in internal units (:mod:`orbatt.units`); frames as in ``DESIGN.md`` §1.
+Quantities are in internal units (:mod:`orbatt.units`); frames as in ``docs/design.md`` §1.
 """
 from __future__ import annotations
 

@@ -111,7 +111,7 @@ def test_newton_euler_agreement_ten_orbits(rigid):
     x0 = _to_ne(s, y0)
     scale = np.abs(x0) + np.r_[np.ones(3), 1e-4 * np.ones(3), np.ones(9), 1e-3 * np.ones(3),
                                np.ones(12)][:x0.size]
-    # scipy's step-end values at the output times: integrate to each (DESIGN.md §4)
+    # scipy's step-end values at the output times: integrate to each (docs/design.md §4)
     xs = [x0]
     for a, b in zip(t[:-1], t[1:]):
         sol = solve_ivp(_newton_euler(s), (a, b), xs[-1], method="DOP853", rtol=2.5e-14, atol=1e-17 * scale)

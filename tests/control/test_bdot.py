@@ -1,4 +1,4 @@
-"""B-dot detumbling (``DESIGN.md`` §10): a 3U CubeSat tumbling at ~9 deg/s on a polar LEO orbit,
+"""B-dot detumbling (``docs/design.md`` §10): a 3U CubeSat tumbling at ~9 deg/s on a polar LEO orbit,
 in the tilted dipole and in IGRF."""
 from __future__ import annotations
 

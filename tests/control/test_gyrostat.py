@@ -1,4 +1,4 @@
-"""The torque-free gyrostat (a rigid body with free reaction wheels, ``DESIGN.md`` §10): the
+"""The torque-free gyrostat (a rigid body with free reaction wheels, ``docs/design.md`` §10): the
 invariants, an independent classical model, and the closed-form axisymmetric solution.
 
 Units are orbatt's internal ones (kg, km, s): inertia kg km^2, momenta kg km^2/s."""

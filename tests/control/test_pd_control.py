@@ -1,4 +1,4 @@
-"""PD quaternion feedback with an ideal actuator (``DESIGN.md`` §10): holding the orbital
+"""PD quaternion feedback with an ideal actuator (``docs/design.md`` §10): holding the orbital
 frame, the steady error of a target away from the gravity-gradient equilibrium, saturation."""
 from __future__ import annotations
 

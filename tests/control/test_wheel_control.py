@@ -1,4 +1,4 @@
-"""PD feedback made by reaction wheels (``actuator = "wheels"``, ``DESIGN.md`` §10): the wheels'
+"""PD feedback made by reaction wheels (``actuator = "wheels"``, ``docs/design.md`` §10): the wheels'
 torque is internal, so the total angular momentum G stays without external torque; under the
 gravity gradient the wheels store its secular part; the motor torque and speed limits hold."""
 from __future__ import annotations

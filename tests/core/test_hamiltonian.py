@@ -116,7 +116,7 @@ def test_quaternion_form_matches_euler_hamiltonian(mass_g, xc):
 
 
 def test_heavy_top_torque_and_sign():
-    """DESIGN.md §3 / §3a item 7: physical U = M g z_c with torque x_c x F_B; the paper's
+    """docs/design.md §3 / §3a item 7: physical U = M g z_c with torque x_c x F_B; the paper's
     printed eq. (18) is the opposite sign."""
     body = orbatt.RigidBody(I)
     xc = np.array([1.0, -0.5, 0.25])
@@ -132,7 +132,7 @@ def test_heavy_top_torque_and_sign():
 
 @pytest.mark.parametrize("potential", [orbatt.HeavyTop(0.7, [0.3, -0.2, 0.9])])
 def test_gradient_is_tangential_and_matches_complex_step(potential):
-    """Gradient of U(q/|q|): tangent to the sphere (q.dU/dq = 0: DESIGN.md §3a item 8) and equal
+    """Gradient of U(q/|q|): tangent to the sphere (q.dU/dq = 0: docs/design.md §3a item 8) and equal
     to a complex-step derivative of U_raw(q/|q|) (5e-16 level)."""
     rng = np.random.default_rng(2)
     xc = potential.params[1:]

@@ -1,5 +1,5 @@
 """Flat-plate drag and SRP, and the magnetic torque, at single instants against independent
-evaluations written here (DESIGN.md §10); drag as a term of the model."""
+evaluations written here (docs/design.md §10); drag as a term of the model."""
 from __future__ import annotations
 
 import numpy as np

@@ -54,7 +54,7 @@ def _propagate(body, q0, Q0, potential, t, inertia=None):
 
 
 class CircularOrbit:
-    """A small stand-in for an orbit provider (the contract of DESIGN.md §5): circular
+    """A small stand-in for an orbit provider (the contract of docs/design.md §5): circular
     Keplerian orbit, radius in km, times in s."""
 
     def __init__(self, a=7000.0, inc=math.pi / 6, raan=math.pi / 4, argp=math.pi / 12, gm=GM_EARTH, epoch=EPOCH):

@@ -3,6 +3,7 @@ so a failure or a SIGKILL during an append leaves the earlier file; the temporar
 killed writes (``.tmp-<name>.<pid>.<hex>``) are removed by the next write once their process
 is gone, and nothing else is touched."""
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -77,7 +78,7 @@ def test_append_refusal_names_the_file_not_the_copy(free_ds, tmp_path):
 
 
 CHILD = textwrap.dedent("""
-    import sys, numpy as np, orbatt
+    import os, sys, time, numpy as np, orbatt
     from orbatt import dataset as D
     from orbatt.trajectory import Trajectory
     out, n = sys.argv[1], int(sys.argv[2])
@@ -90,6 +91,14 @@ CHILD = textwrap.dedent("""
     ds = D.to_dataset(tr)
     D.write_netcdf(ds.isel(time=slice(0, 50)), out)
     print("first", flush=True)
+    real = os.replace
+    def held(src, dst, *a, **k):  # hold the append right before its rename: the parent kills it there
+        if os.path.basename(str(src)).startswith(".tmp-"):
+            print("inside", flush=True)
+            while True:
+                time.sleep(0.01)
+        return real(src, dst, *a, **k)
+    os.replace = held
     D.write_netcdf(ds.isel(time=slice(49, None)), out, append=True)
     print("done", flush=True)
 """)
@@ -97,22 +106,15 @@ CHILD = textwrap.dedent("""
 
 def test_sigkill_during_an_append_leaves_the_earlier_data(tmp_path):
     out = tmp_path / "r.nc"
-    proc = subprocess.Popen([sys.executable, "-c", CHILD, str(out), "3000000"], cwd=tmp_path,
+    proc = subprocess.Popen([sys.executable, "-c", CHILD, str(out), "3000"], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "first", proc.stderr.read()
     first = out.read_bytes()
-    caught = False
-    deadline = time.monotonic() + 120
-    while proc.poll() is None and time.monotonic() < deadline:
-        if any(n.startswith(".tmp-r.nc.") for n in _names(tmp_path)):
-            time.sleep(0.1)  # into the copy or the append
-            proc.kill()
-            caught = True
-            break
-        time.sleep(0.002)
+    assert proc.stdout.readline().strip() == "inside", proc.stderr.read()  # blocks until the child is there
+    assert any(n.startswith(".tmp-r.nc.") for n in _names(tmp_path))
+    proc.kill()
     proc.communicate(timeout=60)
-    if not caught or proc.returncode == 0:
-        pytest.skip("the append finished before the kill (machine too fast to catch it)")
+    assert proc.returncode == -signal.SIGKILL
     assert out.read_bytes() == first
     ds = D.open_dataset(out, load=True)
     np.testing.assert_array_equal(ds["time"].values, np.arange(50.0))

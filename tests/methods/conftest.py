@@ -1,5 +1,5 @@
 """Fixtures of the tests of orbatt.methods and orbatt.propagation: the paper's bodies with
-its printed initial state (DESIGN.md §9)."""
+its printed initial state (docs/design.md §9)."""
 import astropy.units as u
 import pytest
 from method_cases import P0_PAPER, Q0_PAPER

@@ -1,5 +1,5 @@
 """Shared data and helpers of the tests of orbatt.methods and orbatt.propagation: the
-paper's problems (DESIGN.md §9), attitude errors, the exact free body, and direct calls of
+paper's problems (docs/design.md §9), attitude errors, the exact free body, and direct calls of
 the compiled kernels."""
 from __future__ import annotations
 
@@ -18,10 +18,10 @@ from orbatt.core import potentials as kp
 from orbatt.core import splitting as ks
 
 # ---------------------------------------------------------------------------------------
-# Problems: the paper's data (DESIGN.md §9)
+# Problems: the paper's data (docs/design.md §9)
 
 Q0_PAPER = np.array([0.5, -1 / math.sqrt(2), 0.0, 0.5])
-#: Q(t0) as printed (radial residual -9.7e-8, DESIGN.md §3a item 9)
+#: Q(t0) as printed (radial residual -9.7e-8, docs/design.md §3a item 9)
 P0_PAPER = np.array([0.3, -0.848528, 0.141421, -1.5])
 #: the printed Q(t0) without its radial residual, so that the exact solution and the
 #: kernels start from the same point of the manifold
@@ -41,7 +41,7 @@ NO_PARAMS = np.zeros(1)
 
 
 class Spec:
-    """A potential given by its kernel specification only (DESIGN.md §3, core.potentials)."""
+    """A potential given by its kernel specification only (docs/design.md §3, core.potentials)."""
 
     def __init__(self, kind, params, table=None):
         self.kind = kind
@@ -87,7 +87,7 @@ def random_states(body, n, seed=0):
 
 def classical_reference(body, state, kind, params, t, rtol=1e-13):
     """Euler's equations I dw/dt = I w x w + tau and dq/dt = 1/2 q (0, w), solved by scipy
-    at a tight tolerance; torques written the classical way (DESIGN.md §3)."""
+    at a tight tolerance; torques written the classical way (docs/design.md §3)."""
     I = body.inertia_value
     w0 = state.omega
 
@@ -109,7 +109,7 @@ def classical_reference(body, state, kind, params, t, rtol=1e-13):
     sol = solve_ivp(f, (t[0], t[-1]), np.concatenate([state.q, w0]), method="DOP853", t_eval=None, rtol=rtol,
                     atol=1e-16, dense_output=False)
     assert sol.success
-    # integrate to each output (DESIGN.md §4: no dense output at this accuracy)
+    # integrate to each output (docs/design.md §4: no dense output at this accuracy)
     out = [np.concatenate([state.q, w0])]
     for a, b in zip(t[:-1], t[1:]):
         s = solve_ivp(f, (a, b), out[-1], method="DOP853", rtol=rtol, atol=1e-16)

@@ -218,7 +218,8 @@ def test_every_term_kind_is_described():
     """The refusal names what acts in words: every term kind of the kernel model has them."""
     from orbatt.core import model as km
 
-    kinds = {km.HEAVY_TOP, *km.ORBIT_TERMS, *km.VELOCITY_TERMS, *km.TABLE_TERMS, *km.EXTENDED_KINDS}
+    kinds = {km.HEAVY_TOP, km.CONSTANT_TORQUE, *km.ORBIT_TERMS, *km.VELOCITY_TERMS, *km.TABLE_TERMS,
+             *km.EXTENDED_KINDS}
     assert set(km.KIND_DESCRIPTIONS) == kinds
     assert all(isinstance(d, str) and d for d in km.KIND_DESCRIPTIONS.values())
 

@@ -71,7 +71,7 @@ def test_vern98_meets_tolerance_and_keeps_invariants(free):
         assert angle(tr.q, qx).max() < bound
         # |q| = 1, q.Q = 0 and the energy T, to the tolerance
         assert np.abs(np.linalg.norm(tr.q, axis=-1) - 1.0).max() < 10 * bound
-        qQ = np.einsum("...i,...i", tr.q, tr.Q)  # (the printed Q(t0) has q.Q = -9.7e-8: DESIGN.md 3a.9)
+        qQ = np.einsum("...i,...i", tr.q, tr.Q)  # (the printed Q(t0) has q.Q = -9.7e-8: docs/design.md §3a item 9)
         assert np.abs(qQ - qQ[0]).max() < 10 * bound
         T = canonical.kinetic_energy(tr.q, tr.Q, body.inertia_value)
         assert np.abs(T / T[0] - 1.0).max() < 10 * bound

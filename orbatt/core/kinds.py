@@ -1,0 +1,80 @@
+"""The term kinds of the kernel model, each described once (``docs/design.md`` §10).
+
+A :class:`TermKind` says what a kind of term row (:mod:`orbatt.core.model`) is: its code in
+the compiled if-chains, its name (the Dataset's ``torque_<name>`` and the scenario's words),
+a description for messages, and what it reads (the orbit, the orbit's velocity, a sampled
+table of its own, the extended state of wheels and control laws, the body rate). The kind
+sets of :mod:`orbatt.core.model` (which rows need an orbit, a velocity, a table slot, the
+extended right-hand side), its :data:`~orbatt.core.model.KIND_DESCRIPTIONS` and the
+Dataset names of :mod:`orbatt.torques` are all derived from :data:`KINDS`; the compiled
+dispatch (``term_value``, ``term_constants``) stays an if-chain on the codes, as numba needs.
+
+Adding a kind: a :class:`TermKind` here, its kernel (a function of ``(q, c)`` and its
+parameters, in :mod:`orbatt.core.torques` or :mod:`orbatt.core.potentials`) with a branch in
+``core.model.term_value``, and the API/scenario key that builds its row.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["TermKind", "KINDS", "BY_CODE", "BY_NAME", "codes_where"]
+
+
+@dataclass(frozen=True)
+class TermKind:
+    """One kind of term row of the kernel model.
+
+    Attributes
+    ----------
+    code : int
+        The row's ``KIND`` (the compiled dispatch's constant).
+    name : str
+        Identifier: the Dataset variable ``torque_<name>`` of a torque term.
+    description : str
+        In words, for messages ("the gravity gradient").
+    orbit : bool
+        Reads the orbit (row 0 must hold one).
+    velocity : bool
+        Reads the orbit's velocity (row 0 gets ``NEEDS_VELOCITY``).
+    table : bool
+        Owns a sampled table (an environment field along the orbit; a ``work`` slot).
+    extended : bool
+        Needs the extended state (wheels' momenta, the body rate: :mod:`orbatt.core.gyrostat`).
+    conservative : bool
+        Has a potential ``U`` (else a torque, ``U = 0``).
+    """
+
+    code: int
+    name: str
+    description: str
+    orbit: bool = False
+    velocity: bool = False
+    table: bool = False
+    extended: bool = False
+    conservative: bool = False
+
+
+#: every term kind, by code
+KINDS = (
+    TermKind(1, "heavy_top", "a heavy top", conservative=True),
+    TermKind(2, "gravity_gradient", "the gravity gradient", orbit=True, conservative=True),
+    TermKind(3, "drag", "aerodynamic drag", orbit=True, velocity=True, table=True),
+    TermKind(4, "srp", "solar radiation pressure", orbit=True, table=True),
+    TermKind(5, "magnetic", "a magnetic dipole", orbit=True, table=True),
+    TermKind(6, "wheels", "reaction wheels", extended=True),
+    # a PD law reads the orbit's velocity (orbital target) and, pointing at the Sun, a table:
+    # row 0 may then be empty (an inertial target), and its table is optional
+    TermKind(7, "control", "a PD control law", velocity=True, extended=True),
+    TermKind(8, "control", "a B-dot control law", orbit=True, table=True, extended=True),
+    TermKind(9, "constant", "a constant body torque"),
+)
+#: the kinds by code
+BY_CODE = {k.code: k for k in KINDS}
+#: the torque-term kinds by name (the Dataset's ``torque_<name>``; control laws excluded: their
+#: torque is ``torque_control``)
+BY_NAME = {k.name: k for k in KINDS if not k.extended}
+
+
+def codes_where(flag: str) -> frozenset:
+    """The codes of the kinds whose attribute ``flag`` is true."""
+    return frozenset(k.code for k in KINDS if getattr(k, flag))
