@@ -14,6 +14,7 @@ Variables (``time`` in s since the start; ``axis`` 1..3 of the frame named by ``
     orbit_a, orbit_e, orbit_i,  osculating elements of the relative orbit about G (M1 + M2)
     orbit_period
     q_norm_error, qQ            the secondary's constraint residuals |q| - 1 and q.Q
+    euler_313                   the secondary's 3-1-3 Euler angles (for ``orbatt plot``)
 """
 from __future__ import annotations
 
@@ -23,7 +24,9 @@ import numpy as np
 
 from .. import canonical as cn
 from ..core import mutual as km
-from ..dataset.build import AXIS_INDEX, AXIS_LABELS, QUAT_INDEX, QUAT_LABELS, QUATERNION_ORDER, global_attrs
+from .. import quaternion as qt
+from ..dataset.build import (AXIS_INDEX, AXIS_LABELS, EULER_313_LABELS, QUAT_INDEX, QUAT_LABELS, QUATERNION_ORDER,
+                             global_attrs)
 from ..dataset.content import Content, Var
 from ..units import DIMENSIONAL_UNITS as UN
 from .system import osculating_elements
@@ -79,6 +82,8 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
         "quat_label": Var(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
         "axis": _var(("axis",), AXIS_INDEX, "1", "vector component index (axis 1, 2, 3 of the named frame)"),
         "axis_label": Var(("axis",), np.array(AXIS_LABELS), {"long_name": "vector component name"}),
+        "euler_313_angle": _var(("euler_313_angle",), np.arange(3), "1", "position in (phi, theta, psi)"),
+        "euler_313_label": Var(("euler_313_angle",), np.array(EULER_313_LABELS), {"long_name": "3-1-3 Euler angle name"}),
     }
     data = {
         "position": _var(vd, pos, UN["length"], "position of the secondary relative to the primary", frame="S"),
@@ -88,6 +93,8 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
                   frames="B relative to S", convention=_MAPS),
         "Q": _var(qd, Q, UN["momentum"], "conjugate momentum of q (Q = 2 q g)", quaternion_order=QUATERNION_ORDER),
         "omega": _var(vd, om2, UN["rate"], "angular velocity of the secondary (body components)", frame="B"),
+        "euler_313": _var(td + ("euler_313_angle",), np.stack(qt.to_euler313(q), axis=-1), "rad",
+                          "3-1-3 Euler angles (phi, theta, psi) of q (paper eq. 12)", frames="B relative to S"),
     }
     if s.rigid_primary:
         data.update({

@@ -191,3 +191,14 @@ def test_contact_between_outputs_stops_the_step_loop():
     traj = exc.value.trajectory
     assert traj.t.size == 1 and exc.value.t == 0.0   # only the start was an output
     assert "touch at 0.517" in str(exc.value)
+
+
+def test_cli_run_info_plot(tmp_path):
+    src = tmp_path / "eq.toml"
+    src.write_text(edit(EQ, 't_end = "10 orbits"', 't_end = "0.5 orbits"'))
+    out = tmp_path / "eq.nc"
+    assert cli("run", src, "-o", out, "--quiet").returncode == 0
+    info = cli("info", out)
+    assert info.returncode == 0 and "energy" in info.stdout
+    r = cli("plot", out, "-o", tmp_path / "fig")
+    assert r.returncode == 0 and len(list((tmp_path / "fig").glob("*.png"))) == 3, r.stderr
