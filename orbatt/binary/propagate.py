@@ -10,7 +10,6 @@ step loop restarts (new derivative, Hairer's initial step), as the right-hand si
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -19,11 +18,12 @@ import numpy as np
 from ..core import dop853 as kd
 from ..core import model as kmod
 from ..core import mutual_splitting as ks
+from ..core.mutual import C_MU
 from ..core.splitting import COMPOSITIONS
 from ..errors import InputError, IntegrationError
 from .system import BinarySystem, rtn_basis
 
-__all__ = ["BinaryTrajectory", "propagate_binary", "METHODS", "Impulse"]
+__all__ = ["BinaryTrajectory", "propagate_binary", "apply_impulse", "METHODS", "Impulse"]
 
 #: the methods of a coupled binary: the step loops of :mod:`orbatt.core.dop853`, and the
 #: symplectic splitting of :mod:`orbatt.core.mutual_splitting` (fixed step, a composition of
@@ -77,8 +77,6 @@ class BinaryTrajectory:
 def apply_impulse(y, c, delta_v):
     """``y`` after the secondary's velocity change ``delta_v`` (radial, along-track, normal,
     km/s): ``p += mu delta_v`` (inertial)."""
-    from ..core.mutual import C_MU
-
     y = y.copy()
     mu = c[C_MU]
     basis = rtn_basis(y[0:3], y[3:6] / mu)
@@ -196,14 +194,6 @@ def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-
         exc.trajectory = traj
         raise exc
     return traj
-
-
-def kepler_period(system, y):
-    """The osculating period (s) of the relative orbit of the state ``y``."""
-    r = np.linalg.norm(y[0:3])
-    v2 = float(np.sum((y[3:6] / system.reduced_mass) ** 2))
-    eps = 0.5 * v2 - system.gm / r
-    return 2.0 * math.pi * math.sqrt((-system.gm / (2.0 * eps)) ** 3 / system.gm) if eps < 0 else math.inf
 
 
 def _grid_steps(times, t0, step, what):

@@ -23,12 +23,12 @@ I1 = np.array([2.93e16, 2.93e16, 3.83e16]) * 1e-6
 P_ORBIT = 11.92 * 3600.0
 
 
-def _system(rigid=True, potential="coupled", m2=M2, i2=I2):
+def binary_system(rigid=True, potential="coupled", m2=M2, i2=I2):
     return BinarySystem(m2 * u.kg, i2 * u.kg * u.km**2, M1 * u.kg, I1 * u.kg * u.km**2 if rigid else None,
                         potential=potential)
 
 
-def _tilted_state(s):
+def tilted_state(s):
     """An excited state: eccentric inclined orbit, the secondary tilted and spinning off-synchronous,
     the primary spinning about a tilted axis (so that every torque and coupling term acts)."""
     q2 = qt.normalize(np.array([0.9, 0.2, -0.1, 0.3]))
@@ -104,8 +104,8 @@ def _rotation_angle(Ra, Rb):
 def test_newton_euler_agreement_ten_orbits(rigid):
     """Position 1e-9 relative, both attitudes 1e-9 rad over 10 orbits, against scipy's DOP853 on
     the Newton-Euler equations (rotation matrices, Euler's equations)."""
-    s = _system(rigid)
-    y0 = _tilted_state(s)
+    s = binary_system(rigid)
+    y0 = tilted_state(s)
     t = np.linspace(0.0, 10 * P_ORBIT, 11)
     tr = propagate_binary(s, y0, t, rtol=1e-13, atol=1e-17)
     x0 = _to_ne(s, y0)
@@ -135,7 +135,7 @@ def test_secondary_mass_to_zero_is_the_one_way_kepler_run():
     """potential = 'gravity-gradient', M2 -> 0: the attitude of provider = 'kepler' with gm = G M1
     (1e-10 rad), and the orbit the Keplerian one."""
     m2 = 1e-6   # kg: G (M1 + M2) = G M1 to 2e-18
-    s = _system(rigid=False, potential="gravity-gradient", m2=m2, i2=I2 * m2 / M2)
+    s = binary_system(rigid=False, potential="gravity-gradient", m2=m2, i2=I2 * m2 / M2)
     q2 = qt.normalize(np.array([0.9, 0.2, -0.1, 0.3]))
     n = 2 * math.pi / P_ORBIT
     w = [0.1 * n, -0.2 * n, 1.3 * n]
@@ -156,7 +156,7 @@ def test_secondary_mass_to_zero_is_the_one_way_kepler_run():
 def test_sphere_ellipsoid_synchronous_equilibrium():
     """Long axis radial, spin n about z with n^2 = G (M1 + M2) / r^3 (1 + 3 (Iyy + Izz - 2 Ixx) /
     (2 M2 r^2)): the configuration stays and the period is 2 pi / n to 1e-12."""
-    s = _system(rigid=False)   # a sphere primary is a point mass at this order
+    s = binary_system(rigid=False)   # a sphere primary is a point mass at this order
     r = 1.19
     Ixx, Iyy, Izz = s.inertia
     n = math.sqrt(s.gm / r**3 * (1 + 3 * (Iyy + Izz - 2 * Ixx) / (2 * s.mass * r**2)))
@@ -182,8 +182,8 @@ def test_sphere_ellipsoid_synchronous_equilibrium():
 def test_energy_and_total_angular_momentum_conserved(method):
     """1e-12 relative at rtol 1e-13 (rigid primary, every coupling acting), with an impulse the
     angular momentum changes by exactly r x (mu dv)."""
-    s = _system(rigid=True)
-    y0 = _tilted_state(s)
+    s = binary_system(rigid=True)
+    y0 = tilted_state(s)
     t = np.linspace(0.0, 5 * P_ORBIT, 51)
     tr = propagate_binary(s, y0, t, method=method, rtol=1e-13, atol=1e-17)
     ds = binary_content(tr)
@@ -197,7 +197,7 @@ def test_energy_and_total_angular_momentum_conserved(method):
 
 
 def test_impulse_changes_the_period_and_angular_momentum():
-    s = _system(rigid=False)
+    s = binary_system(rigid=False)
     n = 2 * math.pi / P_ORBIT
     y0 = s.state_from_elements(1.19 * u.km, 0.0, 0 * u.deg, 0 * u.deg, 0 * u.deg, 0 * u.deg, [1, 0, 0, 0],
                                [0, 0, n] * u.rad / u.s)

@@ -2,7 +2,7 @@
 the total angular momentum to round-off, bounded energy error, impulses on the grid."""
 import numpy as np
 import pytest
-from test_binary_physics import P_ORBIT, _system, _tilted_state
+from test_binary_physics import P_ORBIT, binary_system, tilted_state
 
 from orbatt.binary import Impulse, binary_content, propagate_binary
 from orbatt.errors import InputError
@@ -10,8 +10,8 @@ from orbatt.errors import InputError
 
 @pytest.fixture(scope="module")
 def case():
-    s = _system(rigid=True)
-    y0 = _tilted_state(s)
+    s = binary_system(rigid=True)
+    y0 = tilted_state(s)
     t = np.linspace(0.0, 4 * P_ORBIT, 5)
     ref = propagate_binary(s, y0, t, rtol=1e-14, atol=1e-18)
     return s, y0, t, ref
@@ -33,8 +33,8 @@ def test_order_and_invariants(case, composition, order):
 
 def test_energy_bounded_over_many_orbits():
     """No drift: the energy error over the last of 40 orbits is not larger than over the first."""
-    s = _system(rigid=True)
-    y0 = _tilted_state(s)
+    s = binary_system(rigid=True)
+    y0 = tilted_state(s)
     t = np.linspace(0.0, 40 * P_ORBIT, 401)
     tr = propagate_binary(s, y0, t, method="splitting", step=P_ORBIT / 100, composition="yoshida4")
     E = binary_content(tr)["energy"].values
@@ -43,8 +43,8 @@ def test_energy_bounded_over_many_orbits():
 
 
 def test_impulse_on_the_grid_matches_dop853():
-    s = _system(rigid=False)
-    y0 = _tilted_state(s)
+    s = binary_system(rigid=False)
+    y0 = tilted_state(s)
     t = np.linspace(0.0, 2 * P_ORBIT, 9)
     imp = [Impulse(t[3], (1e-6, -2e-6, 5e-7))]
     a = propagate_binary(s, y0, t, impulses=imp, rtol=1e-13, atol=1e-17)
