@@ -63,7 +63,9 @@ class BinaryScenario:
                 r, v = kep.state(0.0)
             init = spec.initial
             q, omega = init["q"], init.get("omega")
-            if init["frame"] == "orbital":  # q relative to O, omega relative to O: to inertial
+            # frame = "orbital": q and omega relative to O; O turns at |r x v| / r^2 about o3 (its
+            # turn about o1, from an out-of-plane acceleration, is left out of this definition)
+            if init["frame"] == "orbital":
                 p = _orbital_frame_quaternion(r, v)
                 n_orb = np.linalg.norm(np.cross(r, v)) / float(r @ r)  # the orbital frame's rate, about o3
                 omega = omega + qt.rotate_inv(q, np.array([0.0, 0.0, n_orb]))
