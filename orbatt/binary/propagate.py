@@ -25,10 +25,12 @@ from .system import BinarySystem, rtn_basis
 
 __all__ = ["BinaryTrajectory", "propagate_binary", "apply_impulse", "METHODS", "Impulse"]
 
-#: the methods of a coupled binary: the step loops of :mod:`orbatt.core.dop853`, and the
-#: symplectic splitting of :mod:`orbatt.core.mutual_splitting` (fixed step, a composition of
-#: :data:`orbatt.core.splitting.COMPOSITIONS`)
-METHODS = {"dop853": kd.advance_coupled, "vern98": kd.advance_coupled_verner98, "splitting": None}
+#: the methods of a coupled binary: the adaptive step loops of :mod:`orbatt.core.dop853`
+#: (:data:`LOOPS`), and the symplectic splitting of :mod:`orbatt.core.mutual_splitting` (fixed
+#: step, a composition of :data:`orbatt.core.splitting.COMPOSITIONS`)
+METHODS = ("dop853", "vern98", "splitting")
+#: the coupled forms of the one adaptive step loop, by method
+LOOPS = {"dop853": kd.advance_coupled, "vern98": kd.advance_coupled_verner98}
 #: outputs per call of the step loop: the separation is checked between calls
 _CHUNK = 512
 
@@ -117,9 +119,9 @@ def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-
     """
     if method not in METHODS:
         raise InputError(f"method: {method!r} is not one of {', '.join(map(repr, METHODS))} for a coupled binary")
-    loop = METHODS[method]
     if method == "splitting":
         return _propagate_split(system, y0, times, step, composition, impulses)
+    loop = LOOPS[method]
     times = np.asarray(times, dtype=np.float64)
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
         raise InputError("times: give increasing output times")
