@@ -23,7 +23,7 @@ from ..core.splitting import COMPOSITIONS
 from ..errors import InputError, IntegrationError
 from .system import BinarySystem, rtn_basis
 
-__all__ = ["BinaryTrajectory", "propagate_binary", "apply_impulse", "METHODS", "Impulse"]
+__all__ = ["BinaryTrajectory", "propagate_binary", "apply_impulse", "METHODS", "LOOPS", "Impulse"]
 
 #: the methods of a coupled binary: the adaptive step loops of :mod:`orbatt.core.dop853`
 #: (:data:`LOOPS`), and the symplectic splitting of :mod:`orbatt.core.mutual_splitting` (fixed
