@@ -175,12 +175,15 @@ def check_sweep_work(scenario, spec):
     case's estimated steps (:attr:`orbatt.scenario.Scenario.work_steps`, at least
     :data:`MIN_CASE_STEPS` a case) exceed :data:`MAX_SWEEP_WORK_STEPS`, before any sample is
     drawn."""
-    steps = spec.cases * max(scenario.work_steps, MIN_CASE_STEPS)
+    per_case = getattr(scenario, "work_steps", None)  # None: a study without the estimate (a binary)
+    if per_case is None:
+        return
+    steps = spec.cases * max(per_case, MIN_CASE_STEPS)
     if steps <= MAX_SWEEP_WORK_STEPS:
         return
     where = "[sweep] samples" if spec.random else f"[sweep.parameters.{next(iter(spec.grid))}] values"
     raise ScenarioError(f"{scenario.path or scenario.name}: {where}: {spec.cases} cases of at least "
-                        f"{max(scenario.work_steps, MIN_CASE_STEPS):.3g} integration steps each is {steps:.3g} steps, "
+                        f"{max(per_case, MIN_CASE_STEPS):.3g} integration steps each is {steps:.3g} steps, "
                         f"more than {MAX_SWEEP_WORK_STEPS:.0e} (days of computing); run fewer cases or split the "
                         "study")
 
