@@ -404,6 +404,8 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         # the physical range of the key the parameter replaces (dimensional scenarios; a std
         # is a spread of the same quantity, bounded alike)
         rng = None if dimensionless else KIND_RANGES.get(p.kind)
+        if rng is not None and p.low == 0.0:  # a positive kind: its own limit names a value <= 0 first
+            rng = (None, rng.bounds(unit)[1])
 
         def q(key, value, _where=where, _unit=unit, _dimless=dimless, _rng=rng):
             return parse_quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless, bounds=_rng)
@@ -472,12 +474,10 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         params[name] = Distribution(kind, low=vals.get("low"), high=vals.get("high"), mean=vals.get("mean"),
                                     std=vals.get("std"))
 
-    spec = SweepSpec(parameters=params, paths=paths)
-    if orbit is not None and orbit.get("central_body") in BODY_RADII and not dimensionless:
-        _check_apoapsis(ctx, params, orbit, BODY_RADII[orbit["central_body"]])
-    spec = SweepSpec(parameters=params)
-    if orbit is not None and orbit.get("central_body") in BODY_RADII and not dimensionless:
-        spec.min_apoapsis = BODY_RADII[orbit["central_body"]]
+    radius = None if orbit is None or dimensionless or "a" not in orbit else BODY_RADII.get(orbit["central_body"])
+    if radius is not None:  # a Keplerian or REBOUND orbit about the Earth: no orbit inside it
+        _check_apoapsis(ctx, params, orbit, radius)
+    spec = SweepSpec(parameters=params, paths=paths, min_apoapsis=radius)
     n_random = sum(d.random for d in params.values())
     if "samples" in table:
         spec.samples = parse_int(ctx, "[sweep] samples", table["samples"], 1)
