@@ -393,9 +393,11 @@ def summary(ds, title="", wall=None) -> str:
 
     settings = json.loads(ds.attrs.get("method_settings", "{}"))  # as ds.orbatt.settings, .stats
     stats = json.loads(ds.attrs.get("integration_stats", "{}"))
-    t = ds["time"].values
+    from .dataset.build import elapsed_unit, elapsed_values
+
+    t = elapsed_values(ds)
     lines = [title] if title else []
-    tu = ds["time"].attrs.get("units", "")
+    tu = elapsed_unit(ds)
     tu = "(dimensionless)" if tu == "1" else tu
     lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {tu} ({t.size} outputs)"
                  + (f", epoch {ds.attrs['epoch']}" if "epoch" in ds.attrs else ""))

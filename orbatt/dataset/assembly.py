@@ -22,7 +22,19 @@ import pandas as pd
 import xarray as xr
 from xarray.indexes import PandasIndex
 
-__all__ = ["variable", "assemble"]
+__all__ = ["variable", "assemble", "decode_time"]
+
+
+def decode_time(var) -> xr.Variable:
+    """The ``time`` coordinate ``var`` (an :class:`xarray.Variable` or a
+    :class:`~orbatt.dataset.content.Var` in the file's CF form) decoded as
+    :func:`xarray.open_dataset` decodes it: ``"seconds since <epoch>"`` to ``datetime64[ns]``
+    (``units`` and ``calendar`` moved to the encoding); a dimensionless time (``"1"``) stays."""
+    var = _as_variable(var)
+    if " since " not in str(var.attrs.get("units", "")):
+        return var
+    out = xr.conventions.decode_cf_variable("time", var)
+    return xr.Variable(out.dims, np.asarray(out.values), out.attrs, encoding=out.encoding)
 
 
 def variable(dims, data, attrs) -> xr.Variable:
