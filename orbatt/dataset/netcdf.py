@@ -94,8 +94,10 @@ def encode(ds: xr.Dataset) -> xr.Dataset:
     :func:`file_time`), no stale encodings."""
     out = ds.drop_encoding()  # new variables (attribute dicts copied, data shared)
     if "time" in ds.coords:
-        time = file_time(ds)
-        out = out.assign_coords(time=(time.dims, time.values, time.attrs))
+        from .assembly import assemble
+
+        coords = {k: (file_time(ds) if k == "time" else out[k].variable) for k in out.coords}
+        out = assemble({k: out[k].variable for k in out.data_vars}, coords, out.attrs)  # the order kept
     return out
 
 
