@@ -120,7 +120,9 @@ def test_orbit_variables(orbit_ds, orbit_traj):
     assert abs((ds.orbatt.epoch - EPOCH).to_value(u.s)) < 1e-9
     times = ds.orbatt.times()
     assert abs((times[-1] - EPOCH).to_value(u.s) - t[-1]) < 1e-6
-    assert ds["time"].attrs["units"] == "s" and ds["time"].attrs["standard_name"] == "time"
+    assert ds["elapsed"].attrs["units"] == "s" and ds["time"].attrs["standard_name"] == "time"
+    assert ds["time"].encoding["units"] == "seconds since 2024-03-20T03:06:00.000000000Z"
+    assert ds["time"].values[0] == np.datetime64("2024-03-20T03:06:00", "ns")
     assert json.loads(ds.attrs["orbit"])["provider"] == "circular-test"
 
 
