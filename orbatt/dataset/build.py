@@ -533,8 +533,8 @@ def cf_time_attrs(epoch, dimensionless):
         for a dimensionless problem ``units = "1"``.
     """
     if dimensionless:
-        return {"long_name": "dimensionless time (unit 1/n, n the problem's rate scale)", "axis": "T",
-                "units": "1"}
+        return {"long_name": "dimensionless time (unit 1/n, n the problem's rate scale)", "standard_name": "time",
+                "axis": "T", "units": "1"}
     attrs = {"long_name": "time (UTC)" if epoch else "time on the nominal epoch", "standard_name": "time",
              "axis": "T"}
     if epoch:
