@@ -393,7 +393,7 @@ def summary(ds, title="", wall=None) -> str:
 
     settings = json.loads(ds.attrs.get("method_settings", "{}"))  # as ds.orbatt.settings, .stats
     stats = json.loads(ds.attrs.get("integration_stats", "{}"))
-    from .dataset.build import elapsed_unit, elapsed_values
+    from .dataset.timeaxis import elapsed_unit, elapsed_values
 
     t = elapsed_values(ds)
     lines = [title] if title else []

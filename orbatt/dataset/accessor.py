@@ -14,9 +14,9 @@ from ..epoch import parse_epoch
 from ..errors import InputError
 from ..units import parse_unit, unit_string
 from . import plots
-from .build import elapsed_unit, elapsed_values
 from .aem import write_aem
 from .netcdf import write_netcdf
+from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["OrbattAccessor"]
 

@@ -68,7 +68,7 @@ from .. import quaternion as qt
 from ..epoch import parse_epoch
 from ..errors import InputError
 from .atomic import replacing
-from .build import elapsed_unit, elapsed_values
+from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["write_aem", "read_aem", "is_orbatt_aem", "Aem", "AemSegment", "aem_direction_cosine_matrix"]
 

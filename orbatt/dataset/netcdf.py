@@ -39,13 +39,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import InputError
-from .atomic import TEMP_PREFIX, replacing
 from ..units import LEGACY_OUTPUT
-from .build import (LABEL_COORDS, UNIT_SYSTEM, LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs,
-                    elapsed_values,
-                    orbatt_version, utc_now)
+from .atomic import TEMP_PREFIX, replacing
+from .build import LABEL_COORDS, UNIT_SYSTEM, orbatt_version, utc_now
 from .content import Content, Var
 from .netcdf_direct import writable, write_content
+from .timeaxis import LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_values
 
 if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is read or made
     import xarray as xr

@@ -16,7 +16,8 @@ import numpy as np
 
 from .. import quaternion as qt
 from ..units import parse_unit, unit_string
-from .build import EULER_313_LABELS, EULER_321_LABELS, elapsed_unit, elapsed_values
+from .build import EULER_313_LABELS, EULER_321_LABELS
+from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["plot_state", "plot_attitude", "plot_drift", "time_axis", "drift_series"]
 
