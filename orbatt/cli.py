@@ -414,7 +414,9 @@ def summary(ds, title="", wall=None) -> str:
                  f"(relative {rel:.3e}){note}")
     lines.append(f"  |q| - 1     max {np.max(np.abs(ds['q_norm_error'].values)):.3e}")
     qQ = ds["qQ"].values
-    lines.append(f"  q.Q         max drift {np.max(np.abs(qQ - qQ[..., :1])):.3e} (initial {qQ.ravel()[0]:.3e})")
+    qu = ds["qQ"].attrs.get("units", "")
+    qu = "" if qu in ("1", "") else f" {qu}"
+    lines.append(f"  q.Q         max drift {np.max(np.abs(qQ - qQ[..., :1])):.3e}{qu} (initial {qQ.ravel()[0]:.3e})")
     if wall is not None:
         lines.append(f"  wall time   {wall:.3f} s (total, including setup and Dataset)")
     if not int(ds.attrs.get("integration_complete", 1)):

@@ -114,7 +114,7 @@ def test_state_and_info_print_si(wheels):
     # g = I omega = 0.18 kg m^2 s^-1: Q = 2 q g has 0.36 on x
     assert repr(st).endswith("kg m^2 s^-1)") and "0.36" in repr(st)
     text = summary(wheels)
-    assert " J (relative" in text and "0 .. 200 s" in text
+    assert " J (relative" in text and "0 .. 200 s" in text and "kg m^2 s^-1 (initial" in text
 
 
 # ---------------------------------------------------------------------------------------
