@@ -85,6 +85,7 @@ class OrbattAccessor:
         Parameters
         ----------
         name : str
+            A variable; ``"time"`` converts ``elapsed`` (``time`` holds datetimes).
         unit : str or astropy Unit
             E.g. ``"degree s-1"``, ``"deg/s"`` or ``u.deg / u.s`` for ``omega``.
 
@@ -94,6 +95,8 @@ class OrbattAccessor:
             The units are not convertible (e.g. a dimensionless problem's ``"1"`` to
             ``"deg/s"``).
         """
+        if name == "time":  # time holds datetimes: its numbers are elapsed's
+            name = "elapsed"
         target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
         src = self.unit(name)
         try:
