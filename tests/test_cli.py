@@ -19,6 +19,8 @@ SHORT = {  # t_end for a short CI run of each shipped scenario
     "iss-tle-gravity-gradient": '"600 s"', "cubesat-3u-disturbances": '"600 s"',
     "mercury-3-2-normalized": "0.7", "hyperion-chaotic-normalized": "1.5",
     "cubesat-bdot-detumble": '"600 s"', "lvlh-hold-wheels": '"600 s"', "iss-tle-disturbances": '"600 s"',
+    "cubesat-detumble-montecarlo": '"600 s"', "nadir-hold-montecarlo": '"600 s"',
+    "didymos-dimorphos": '"1.5 d"', "sphere-ellipsoid-equilibrium": '"1 orbits"',
 }
 
 
@@ -62,9 +64,12 @@ def test_run_plot_and_plot_command(tmp_path):
     r = cli("run", path, "-o", tmp_path / "tf.nc", "--plot", tmp_path / "figs")
     assert r.returncode == 0, r.stderr
     assert "energy" in r.stdout
-    assert len(list((tmp_path / "figs").glob("*.png"))) == 3
+    # torque-free, no orbit: the body rate and the drift of the invariants (issue 26 item 4)
+    assert sorted(p.name for p in (tmp_path / "figs").glob("*.png")) == ["paper-torque-free-drift.png",
+                                                                         "paper-torque-free-rates.png"]
     r = cli("plot", tmp_path / "tf.nc", "-o", tmp_path / "figs2")
     assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (tmp_path / "figs2").glob("*.png")) == ["tf-drift.png", "tf-rates.png"]
     assert all(p.stat().st_size > 10_000 for p in (tmp_path / "figs2").glob("*.png"))
 
 

@@ -18,6 +18,7 @@ from .build import (build_initial_state, build_kepler_orbit, build_output_times,
                     build_rebound_orbit, build_tle_orbit, check_work, environment_margin, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
+from .binary_schema import BinarySpec
 from ..dataset.build import dataset_content
 from ..dataset.content import Content
 from ..propagation import propagate
@@ -49,6 +50,13 @@ class Scenario:
     settings : dict
         ``rtol``, ``atol``, ``step`` as given (step in the time unit).
     """
+
+    def __new__(cls, spec=None, path=None):
+        if isinstance(spec, BinarySpec):  # [orbit] provider = "coupled": scenario/binary_scenario.py
+            from .binary_scenario import BinaryScenario  # (imported for binaries only)
+
+            return BinaryScenario(spec, path=path)
+        return super().__new__(cls)
 
     def __init__(self, spec: Spec, path=None):
         self.spec = spec

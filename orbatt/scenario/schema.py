@@ -19,7 +19,8 @@ dimensional quantities is refused naming the first plain key)::
                   frame = "inertial" (default) | "orbital"
     [potential]   kind = "torque-free" | "heavy-top" | "gravity-gradient"
                   sign = "physical" (default) | "paper"        (heavy top)
-    [orbit]       provider = "kepler" | "rebound"; central_body = "earth" | gm = "..."
+    [orbit]       provider = "kepler" | "rebound" | "tle" | "coupled" (a binary asteroid: its own
+                  schema, :mod:`orbatt.scenario.binary_schema`); central_body = "earth" | gm = "..."
                   a, e, i, raan, argp, and one of true_anomaly | mean_anomaly
                   epoch (ISO UTC); rebound: perturbations = ["j2", "moon", "sun"], integrator
     [integration] method, rtol, atol | step, t_end, output_step, independent_variable
@@ -71,6 +72,7 @@ from ..epoch import parse_epoch
 from .key_docs import parse_key_docs
 from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
+from .binary_schema import BinarySpec, is_binary, parse_binary
 from .control_schema import CONTROL_KEYS, parse_control
 from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
@@ -293,8 +295,9 @@ class Spec:
     control: dict | None = None  # [control] and the wheels (control_schema.py)
 
 
-def parse(text: str, source: str = "<scenario>") -> Spec:
-    """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field."""
+def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
+    """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field. A binary
+    asteroid (``[orbit] provider = "coupled"``) gives a :class:`~orbatt.scenario.binary_schema.BinarySpec`."""
     ctx = FieldContext(source)
     try:
         data = tomllib.loads(text)
@@ -303,6 +306,8 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     except RecursionError:
         raise ctx.error("TOML", "arrays or tables nested too deeply to parse; scenario values are at most "
                                 "2 levels deep") from None
+    if is_binary(data):  # [orbit] provider = "coupled" or a [primary]: a binary asteroid
+        return parse_binary(ctx, data, text, source)
     _check_keys(ctx, data)
     body = data["body"]
     if "inertia" not in body:
@@ -365,14 +370,11 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         except InputError as exc:
             raise ctx.error("[[body.wheels]] inertia", str(exc).split(": ", 1)[-1]) from None
     sweep = None
-    if "sweep" in data and control is not None:
-        raise ctx.error("[sweep]", "sweeps of scenarios with [control] or [[body.wheels]] are not supported yet; run "
-                                   "the cases one by one")
-    if "sweep" in data and torques is not None:
-        raise ctx.error("[sweep]", "sweeps of scenarios with [torques] are not supported yet; run the cases one by one")
     if "sweep" in data:
         sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
-                                  frame=frame)
+                                  frame=frame, conservative=control is None and torques is None,
+                                  control=None if control is None else control["control"],
+                                  wheels=0 if control is None else len(control["wheels"]), data=data)
     name = data.get("name", Path(source).stem)
     desc = data.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):

@@ -8,23 +8,27 @@ dimensionless scenario. Drawing the samples is :mod:`orbatt.sweep.sampling`'s jo
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import units as U
 from ..dataset import DIMENSIONLESS_UNITS
 from ..units import INTERNAL_UNITS
+from .paths import leaf_quantity, resolve, split_path
+from .study_schema import parse_study_keys
 from .fields import parse_int, parse_quantity
 from .key_docs import parse_key_docs
 
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
            "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
-           "parameter_unit", "parameter_units", "in_limits", "limits_text"]
+           "parameter_unit", "parameter_units", "in_limits", "limits_text", "PATH_PARAMETER", "definition", "path_unit", "sweep_units",
+           "FIXED_TABLES"]
 
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
-              "tumbling_angle", "on_invalid")
+              "tumbling_angle", "on_invalid", "detumble_rate", "settling_angle", "window")
 #: what each key of [sweep] is: ``(dimension, default, meaning)`` (``docs/scenarios.md``), written
 #: as a table (:mod:`orbatt.scenario.key_docs`)
 SWEEP_KEY_DOCS = parse_key_docs("""
@@ -48,9 +52,16 @@ tumbling_angle      angle                   90 deg                              
                                                                                                tumbles
 on_invalid          'error' | 'resample'    'error'                                            what to do with a draw outside the
                                                                                                physical limits
+detumble_rate       angular velocity        required with 'detumble_time'                      detumble_time: the earliest time after
+                                                                                               which |omega| stays below it
+settling_angle      angle                   required with 'settling_time'                      settling_time: the earliest time after
+                                                                                               which the pointing error stays below it
+window              time                    the last orbit, else the last 10 % of the run      span before t_end that
+                                                                                               pointing_error_max/_rms summarize
 """)["sweep"]
 #: outputs that may be asked for
-OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error")
+OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error", "detumble_time",
+           "settling_time", "pointing_error", "max_wheel_speed", "wheel_saturated", "max_control_torque", "max_dipole")
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
 DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "normal": ("mean", "std"), "truncnormal": ("mean", "std", "low", "high")}
@@ -87,6 +98,15 @@ PARAMETERS = {
     "orbit_true_anomaly": Parameter("orbit", "angle", long_name="true anomaly at the epoch"),
     "orbit_mean_anomaly": Parameter("orbit", "angle", long_name="mean anomaly at the epoch"),
 }
+#: what a parameter given by its scenario path is (its unit: the key's, :attr:`SweepSpec.paths`)
+PATH_PARAMETER = Parameter("path", "path", long_name="scenario key")
+
+
+def definition(name) -> Parameter:
+    """The :class:`Parameter` of a swept name: a named one, or :data:`PATH_PARAMETER`."""
+    return PARAMETERS.get(name, PATH_PARAMETER)
+
+
 INERTIA_PARAMETERS = ("inertia1", "inertia2", "inertia3")
 RATE_PARAMETERS = ("omega1", "omega2", "omega3")
 ORBIT_PARAMETERS = tuple(k for k, p in PARAMETERS.items() if p.group == "orbit")
@@ -105,6 +125,12 @@ def parameter_units(dimensionless):
     parameters in kg m^2 (:func:`orbatt.sweep.chunk.chunk_dataset`)."""
     table = DIMENSIONLESS_UNITS if dimensionless else INTERNAL_UNITS
     return {name: table[p.kind] for name, p in PARAMETERS.items()}
+
+
+def sweep_units(spec, dimensionless):
+    """CF unit string of every parameter a sweep can vary (:func:`parameter_units`) and of each
+    path it varies (the key's unit as the file writes it; ``"1"`` for a plain number)."""
+    return {**parameter_units(dimensionless), **{k: ("1" if v is None else v) for k, v in spec.paths.items()}}
 
 
 @dataclass(frozen=True)
@@ -190,6 +216,10 @@ class SweepSpec:
     tumbling_angle: float = 0.5 * math.pi
     on_invalid: str = "error"
     energy: str | None = None   # "hamiltonian" or "jacobi": the conserved energy (when one exists)
+    paths: dict = field(default_factory=dict)  # swept scenario path -> the key's unit text (None: plain)
+    detumble_rate: float | None = None   # rad/s (or plain): detumble_time's threshold
+    settling_angle: float | None = None  # rad: settling_time's threshold
+    window: float | None = None          # s (or plain): pointing_error's window; None: the default
 
     @property
     def grid(self) -> dict:
@@ -226,7 +256,45 @@ def limits_text(p: Parameter, unit_text):
     return f"{lb}{lo}, {hi}{hb} {unit_text}".rstrip()
 
 
-def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame):
+#: tables whose keys a sweep does not vary: the output times and the method are shared by all cases
+FIXED_TABLES = ("sweep", "integration", "name", "description")
+
+
+def path_unit(ctx, path, data):
+    """The unit text of the numeric scenario key at ``path`` (None for a plain number), checked:
+    the path exists in ``data``, is not in :data:`FIXED_TABLES`, holds a number (a
+    ``"<number> <unit>"`` string or a plain number), not an epoch; raises
+    :class:`~orbatt.scenario.ScenarioError` naming the path."""
+    where = f'[sweep.parameters."{path}"]'
+    try:
+        steps = split_path(path)
+    except ValueError as exc:
+        raise ctx.error(where, str(exc)) from None
+    if steps[0] in FIXED_TABLES:
+        raise ctx.error(where, f"[{steps[0]}] is shared by all cases (the output times and the method); vary the keys "
+                               "of [body], [initial], [orbit], [control], [torques], [environment], [primary]")
+    try:
+        leaf = resolve(data or {}, path)
+    except LookupError as exc:
+        raise ctx.error(where, f"{exc}; give the path of a key the scenario has") from None
+    if isinstance(steps[-1], str) and steps[-1] == "epoch" or (isinstance(leaf, str) and re.match(r"^\s*\d{4}-", leaf)):
+        raise ctx.error(where, f"{leaf!r} is a time (an epoch): time-valued keys do not vary in a sweep yet")
+    if isinstance(leaf, list):
+        raise ctx.error(where, f"holds a list; vary one element, e.g. \"{path}[0]\"")
+    try:
+        _, unit = leaf_quantity(leaf)
+    except ValueError as exc:
+        raise ctx.error(where, f"{exc}: only numeric keys vary") from None
+    if unit is not None:
+        try:
+            U.parse_unit(unit)
+        except Exception:  # noqa: BLE001 - the scenario's own check names it better
+            raise ctx.error(where, f"{leaf!r} is not a number with a unit: only numeric keys vary") from None
+    return unit
+
+
+def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame, conservative=True, control=None,
+                      wheels=0, data=None):
     """Validate a ``[sweep]`` table (called by :func:`orbatt.scenario.schema.parse`).
 
     Parameters
@@ -242,6 +310,15 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         The validated ``[orbit]`` table.
     frame : str
         ``[initial] frame``.
+    conservative : bool
+        Whether the scenario has a conserved energy (no ``[torques]``, no ``[control]``):
+        ``final_energy_error`` needs one.
+    control : PDControl or BDotControl or None
+        The scenario's control law (the study outputs that need one).
+    wheels : int
+        The number of reaction wheels.
+    data : dict
+        The whole scenario (TOML): the parameters given by their path are looked up there.
 
     Returns
     -------
@@ -252,9 +329,6 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     ScenarioError
         Naming ``[sweep] key`` or ``[sweep.parameters.NAME] key``, the value and the fix.
     """
-    if orbit is not None and orbit["provider"] == "tle":
-        raise ctx.error("[sweep]", "sweeps over a TLE orbit (provider = 'tle') are not supported; "
-                                   "use a kepler or rebound orbit for a sweep")
     for k in table:
         if k not in SWEEP_KEYS:
             raise ctx.error(f"[sweep] {k}", f"unknown key; allowed keys in [sweep]: {', '.join(sorted(SWEEP_KEYS))}")
@@ -262,23 +336,37 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     if not isinstance(raw, dict) or not raw:
         raise ctx.error("[sweep] parameters", "missing or empty; give at least one parameter to vary, e.g. "
                                               "[sweep.parameters] inertia1 = { distribution = \"normal\", std = \"1 kg m2\" }")
+    paths = {}
     for name in raw:
         if name not in PARAMETERS:
-            raise ctx.error(f"[sweep.parameters] {name}", f"unknown parameter; allowed: {', '.join(PARAMETERS)}")
-    units = parameter_units(dimensionless)
+            if "." not in name and "[" not in name:
+                raise ctx.error(f"[sweep.parameters] {name}", f"unknown parameter; give a scenario path such as "
+                                                              f"\"control.gain\" or \"initial.omega[0]\", or one of "
+                                                              f"{', '.join(PARAMETERS)}")
+            paths[name] = path_unit(ctx, name, data)
+    if paths and "attitude_angle" in raw:
+        raise ctx.error("[sweep.parameters] attitude_angle", "combines with the named parameters only; vary "
+                                                             "\"initial.q[k]\" or the Euler angles by their paths")
+    units = sweep_units(SweepSpec(parameters={}, paths=paths), dimensionless)
     params = {}
-    for name in PARAMETERS:  # canonical order
-        if name not in raw:
-            continue
-        p = PARAMETERS[name]
-        where = f"[sweep.parameters.{name}]"
+    for name in [*(k for k in PARAMETERS if k in raw), *paths]:  # canonical order, then the paths as given
+        p = definition(name)
+        where = f"[sweep.parameters.{name}]" if name in PARAMETERS else f'[sweep.parameters."{name}"]'
+
         if p.group == "orbit":
             if orbit is None:
                 raise ctx.error(where, "orbit elements vary only in a scenario with an [orbit]")
+            if orbit["provider"] == "tle":
+                raise ctx.error(where, "a TLE orbit (provider = 'tle') is shared by all cases: its elements do not "
+                                       "vary; use a kepler or rebound orbit to vary them")
             if name in ("orbit_true_anomaly", "orbit_mean_anomaly") and name[6:] != orbit["anomaly_kind"]:
                 raise ctx.error(where, f"the [orbit] gives {orbit['anomaly_kind']}; vary orbit_{orbit['anomaly_kind']}")
-        unit = parameter_unit(p.kind)
-        dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
+        if name in paths:
+            unit = U.DIMENSIONLESS if paths[name] is None else U.parse_unit(paths[name])
+            dimless = paths[name] is None
+        else:
+            unit = parameter_unit(p.kind)
+            dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
         cf = units[name]
 
         def q(key, value, _where=where, _unit=unit, _dimless=dimless):
@@ -345,7 +433,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         params[name] = Distribution(kind, low=vals.get("low"), high=vals.get("high"), mean=vals.get("mean"),
                                     std=vals.get("std"))
 
-    spec = SweepSpec(parameters=params)
+    spec = SweepSpec(parameters=params, paths=paths)
     n_random = sum(d.random for d in params.values())
     if "samples" in table:
         spec.samples = parse_int(ctx, "[sweep] samples", table["samples"], 1)
@@ -367,6 +455,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             if o not in OUTPUTS:
                 raise ctx.error("[sweep] outputs", f"{o!r} is not one of {', '.join(map(repr, OUTPUTS))}")
         spec.outputs = tuple(o for o in OUTPUTS if o in outs)
+        if "final_energy_error" in spec.outputs and not conservative:
+            raise ctx.error("[sweep] outputs", "'final_energy_error' needs a conserved energy: this scenario has "
+                                               "[torques] or [control] (non-conservative); remove the output")
     if "pointing_axis" in table:
         ax = table["pointing_axis"]
         if not (isinstance(ax, list) and len(ax) == 3 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
@@ -393,8 +484,10 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         if not 0 < spec.tumbling_angle <= math.pi:
             raise ctx.error("[sweep] tumbling_angle", f"{table['tumbling_angle']!r} is outside (0, 180] deg")
     for k in ("pointing_axis", "pointing_reference"):
-        if k in table and not {"max_pointing_error", "tumbling"} & set(spec.outputs):
-            raise ctx.error(f"[sweep] {k}", "only used with 'max_pointing_error' or 'tumbling' in outputs")
+        if k in table and not {"max_pointing_error", "tumbling", "settling_time", "pointing_error"} & set(spec.outputs):
+            raise ctx.error(f"[sweep] {k}", "only used with 'max_pointing_error', 'tumbling', 'settling_time' or "
+                                            "'pointing_error' in outputs")
+    parse_study_keys(ctx, table, spec, dimensionless=dimensionless, control=control, wheels=wheels)
     if "on_invalid" in table:
         if table["on_invalid"] not in ("error", "resample"):
             raise ctx.error("[sweep] on_invalid", f"{table['on_invalid']!r} is not 'error' or 'resample'")

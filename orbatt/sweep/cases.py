@@ -6,12 +6,16 @@ from __future__ import annotations
 import hashlib
 import json
 import secrets
+import tomllib
+import warnings
 
 import numpy as np
 
-from ..errors import InputError
-from ..scenario import load_scenario
-from ..scenario.sweep_schema import parameter_units
+from ..errors import InputError, ScenarioError
+from ..scenario import load_scenario, parse
+from ..scenario.paths import toml_text
+from .case_groups import case_data, case_text
+from ..scenario.sweep_schema import sweep_units
 from .chunk import compute_chunk
 from .sampling import SAMPLING_VERSION, draw_samples, nominal_values
 
@@ -73,8 +77,10 @@ class Sweep:
         self.cases = spec.cases
         self.nominal = nominal_values(scenario)
         dimless = scenario.spec.dimensionless
-        self.units = parameter_units(dimless)
-        self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, self.units)
+        self.units = sweep_units(spec, dimless)
+        check = _case_check(scenario, spec) if spec.paths else None
+        self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, self.units,
+                                                                       check)
         h = hashlib.sha256(f"{FORMAT}\nsampling {SAMPLING_VERSION}\n{self.seed}\n{self.cases}\n".encode()
                            + scenario.text.encode())
         self.fingerprint = h.hexdigest()[:32]
@@ -103,6 +109,13 @@ class Sweep:
                 "values": {k: v[start:stop].copy() for k, v in self.values.items()},
                 "axis": None if self.attitude_axis is None else self.attitude_axis[start:stop].copy(),
                 "numba_threads": numba_threads}
+
+    def case_text(self, k) -> str:
+        """The scenario (TOML text) of case ``k``: the file with the swept keys replaced, without
+        ``[sweep]``. ``orbatt run`` of it gives the case's results bit for bit."""
+        if not 0 <= k < self.cases:
+            raise InputError(f"case: {k!r} is not one of the {self.cases} cases")
+        return case_text(self.scenario, self.spec, self.values, k)
 
     def compute(self, start=0, stop=None):
         """Compute a range of cases here, as one chunk: one ensemble call of
@@ -148,6 +161,29 @@ class Sweep:
     def __repr__(self):
         return (f"Sweep({self.scenario.name!r}, cases={self.cases}, parameters={list(self.spec.parameters)}, "
                 f"seed={self.seed})")
+
+
+def _case_check(scenario, spec):
+    """The ``check`` of :func:`~orbatt.sweep.sampling.draw_samples` for a sweep of scenario
+    paths: each case's scenario validated as a file (its messages kept by case)."""
+    base = tomllib.loads(scenario.text)
+    source = str(scenario.path) if scenario.path is not None else scenario.name
+    dimless = scenario.spec.dimensionless
+
+    def check(values, cases):
+        bad = np.zeros(spec.cases, dtype=bool)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for k in cases:
+                try:
+                    parse(toml_text(case_data(base, spec, values, int(k), dimless)), source)
+                except ScenarioError as exc:
+                    bad[k] = True
+                    check.messages[int(k)] = str(exc).split(": ", 1)[-1]
+        return bad
+
+    check.messages = {}
+    return check
 
 
 def load_sweep(path, *, seed=None) -> Sweep:

@@ -9,6 +9,7 @@ Quantities are in internal units (:mod:`orbatt.units`); frames as in ``docs/desi
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import time
@@ -23,12 +24,14 @@ from ..core import potentials as kp
 from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
+from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
 from ..units import LEGACY_OUTPUT, to_output
-from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_rebound_orbit, parse
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
-                                     parameter_units)
+                                     sweep_units)
 from .sampling import nominal_rates
-from ..potentials import GravityGradient
+from ..scenario.paths import coordinate_name
+from .case_groups import path_groups
+from .study import STUDY_OUTPUTS, study_outputs, target_pointing_error
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
 from ..orbits.base import as_times
@@ -62,7 +65,7 @@ def run_chunk(job):
 
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
     sc = scenario_from_text(job["text"], job["source"])
-    ds = compute_chunk(sc, sc.spec.sweep, job, parameter_units(sc.spec.dimensionless))
+    ds = compute_chunk(sc, sc.spec.sweep, job, sweep_units(sc.spec.sweep, sc.spec.dimensionless))
     ds.attrs["sweep_chunk_seconds"] = time.perf_counter() - t0
     return ds
 
@@ -103,7 +106,10 @@ def orbit_groups(sc, spec, values, n):
             orbit = build_kepler_orbit(ctx, o)
             if o["provider"] == "rebound":
                 orbit = build_rebound_orbit(ctx, o, orbit, float(sc.times[-1]))
-        out.append((orbit, GravityGradient(orbit), np.flatnonzero(inverse == g)))
+            # the single run's builder: the gravity gradient, or the environment torques and
+            # control law along this orbit (sampled over the run as the case's own run samples them)
+            potential = build_potential(dataclasses.replace(sc.spec, orbit=o), orbit, float(sc.times[-1]))
+        out.append((orbit, potential, np.flatnonzero(inverse == g)))
     return out
 
 
@@ -140,14 +146,23 @@ def initial_states(sc, spec, values, axis, inertia, orbit, idx):
     else:
         q = q_c
     q = unit_quaternion(q)
+    if sc.body.wheels:  # a gyrostat: Q holds the wheels' momentum too, as the case's own run builds it
+        iu = sc.body.inertia_unit
+        Q = np.empty((m, 4))
+        for e in range(m):
+            body = RigidBody(inertia[idx[e]].tolist() if sc.body.dimensionless else inertia[idx[e]] * iu,
+                             wheels=sc.body.wheels)
+            Q[e] = State.from_omega(body, q[e], w[e] if body.dimensionless else w[e] * body.rate_unit).Q
+        return q, Q
     st = State(sc.body, q, cn.momentum_from_omega(q, w, inertia[idx]))
     return st.q, st.Q
 
 
 def propagate_group(sc, bodies, q0, Q0, potential):
     """Ensemble propagation of one group: ``(trajectory or None, q, Q, failed, stats)``,
-    ``q, Q`` (m, N, 4). A member that fails is rerun alone and left NaN (members are
-    independent, so the others' results do not change)."""
+    ``q, Q`` (m, N, 4); the trajectory's ``wheel_momenta`` (m, N, n) hold the wheels' momenta
+    of a gyrostat. A member that fails is rerun alone and left NaN (members are independent,
+    so the others' results do not change)."""
 
     kw = dict(sc.settings)
     m = q0.shape[0]
@@ -161,6 +176,7 @@ def propagate_group(sc, bodies, q0, Q0, potential):
     N = sc.times.size
     q = np.full((m, N, 4), np.nan)
     Q = np.full((m, N, 4), np.nan)
+    W = None
     stats = {}
     tr = None
     for e in range(m):
@@ -172,7 +188,13 @@ def propagate_group(sc, bodies, q0, Q0, potential):
             continue
         tr = t1
         q[e], Q[e] = t1.q[0], t1.Q[0]
+        if t1.wheel_momenta is not None:
+            if W is None:
+                W = np.full((m, N, t1.wheel_momenta.shape[-1]), np.nan)
+            W[e] = t1.wheel_momenta[0]
         add_stats(stats, t1.stats)
+    if tr is not None:
+        tr = dataclasses.replace(tr, q=q, Q=Q, wheel_momenta=W)
     return tr, q, Q, failed, stats
 
 
@@ -261,21 +283,30 @@ def compute_chunk(sc, spec, job, units):
     for k, name in enumerate(INERTIA_PARAMETERS):
         if name in values:
             inertia[:, k] = values[name]
-    vary_inertia = any(k in spec.parameters for k in INERTIA_PARAMETERS)
+    vary_inertia = any(k in spec.parameters for k in INERTIA_PARAMETERS) and not spec.paths
+    all_bodies = None
     if vary_inertia:
 
         iu = sc.body.inertia_unit
-        all_bodies = [RigidBody(inertia[e].tolist() if dimless else inertia[e] * iu) for e in range(n)]
+        all_bodies = [RigidBody(inertia[e].tolist() if dimless else inertia[e] * iu, wheels=sc.body.wheels)
+                      for e in range(n)]
     outs = set(spec.outputs)
     res = {name: np.empty((n, 4)) for name in ("q_initial", "Q_initial", "q_final", "Q_final")}
     res.update(inertia=inertia, failed=np.zeros(n, dtype=bool), pointing_error=np.full(n, np.nan),
                energy_error=np.full(n, np.nan))
+    study = [o for o in STUDY_OUTPUTS if o in outs]
+    nw = len(sc.body.wheels)
+    for o in study:
+        for name in STUDY_OUTPUTS[o]:
+            res[name] = np.full((n, nw), np.nan) if o == "max_wheel_speed" else (
+                np.full((n, nw), -1, dtype=np.int8) if o == "wheel_saturated" else np.full(n, np.nan))
     stats = {}
     pieces = []
-    for orbit, potential, idx in orbit_groups(sc, spec, values, n):
-        q0, Q0 = initial_states(sc, spec, values, axis, inertia, orbit, idx)
-        bodies = [all_bodies[e] for e in idx] if vary_inertia else [sc.body]
-        tr, q, Q, bad, st = propagate_group(sc, bodies, q0, Q0, potential)
+    for group_sc, idx, bodies, q0, Q0 in _groups(sc, spec, values, axis, inertia, n, all_bodies if vary_inertia
+                                                 else None):
+        orbit, potential = group_sc.orbit, group_sc.potential
+        inertia[idx] = [b.inertia_value for b in bodies] if len(bodies) == idx.size else inertia[idx]
+        tr, q, Q, bad, st = propagate_group(group_sc, bodies, q0, Q0, potential)
         add_stats(stats, st)
         res["failed"][idx] = bad
         res["q_initial"][idx], res["Q_initial"][idx] = q0, Q0
@@ -283,6 +314,8 @@ def compute_chunk(sc, spec, job, units):
         if {"max_pointing_error", "tumbling"} & outs:
             p = orbit.orbital_quaternion(sc.times) if spec.pointing_reference == "orbital" else None
             res["pointing_error"][idx] = np.max(pointing_error(spec, q, p), axis=-1)
+        if study:
+            _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, bad, res)
         if "final_energy_error" in outs:
             E0 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, 0], Q[:, 0], float(sc.times[0]))
             E1 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, -1], Q[:, -1], float(sc.times[-1]))
@@ -291,7 +324,8 @@ def compute_chunk(sc, spec, job, units):
             body0 = bodies[0]
             full = Trajectory(body=body0, potential=potential, t=sc.times, q=q, Q=Q,
                               inertia=inertia[idx], method=tr.method if tr is not None else sc.method,
-                              settings=tr.settings if tr is not None else {}, stats=st, complete=True)
+                              settings=tr.settings if tr is not None else {}, stats=st, complete=True,
+                              wheel_momenta=None if tr is None else tr.wheel_momenta)
             with np.errstate(invalid="ignore"):
                 piece = to_dataset(full, scenario_text=sc.text, title=f"orbatt sweep: {sc.name}")
             piece = piece.assign_coords(case=("case", start + idx, piece["case"].attrs))
@@ -302,6 +336,53 @@ def compute_chunk(sc, spec, job, units):
             pieces.append(piece)
 
     return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
+
+
+class _Group:
+    """The part of a :class:`~orbatt.scenario.Scenario` a group of cases shares: the nominal
+    scenario with another orbit and potential (named parameters vary the orbit)."""
+
+    def __init__(self, sc, orbit, potential):
+        self.times, self.settings, self.method, self.body = sc.times, sc.settings, sc.method, sc.body
+        self.orbit, self.potential = orbit, potential
+
+
+def _groups(sc, spec, values, axis, inertia, n, all_bodies):
+    """``(scenario, idx, bodies, q0, Q0)`` of every group of the chunk: by their scenario paths
+    (:func:`orbatt.sweep.case_groups.path_groups`), else by orbit (named parameters)."""
+    if spec.paths:
+        yield from path_groups(sc, spec, values, n)
+        return
+    for orbit, potential, idx in orbit_groups(sc, spec, values, n):
+        q0, Q0 = initial_states(sc, spec, values, axis, inertia, orbit, idx)
+        bodies = [all_bodies[e] for e in idx] if all_bodies is not None else [sc.body]
+        yield _Group(sc, orbit, potential), idx, bodies, q0, Q0
+
+
+def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, failed, res):
+    """The study outputs (:mod:`orbatt.sweep.study`) of the cases ``idx`` of one orbit group into
+    ``res``, case by case (a failed case keeps NaN, and -1 for the saturation flags)."""
+    control = getattr(potential, "control", None)
+    by_target = control is not None and control.law == "pd" and control.target in ("orbital", "inertial")
+    p = None
+    if orbit is not None and ((by_target and control.target == "orbital") or spec.pointing_reference == "orbital"):
+        p = orbit.orbital_quaternion(sc.times)
+    W = None if tr is None else tr.wheel_momenta
+
+    def pointing(t, qq):
+        pp = None if p is None else (p if t is sc.times else orbit.orbital_quaternion(t))
+        if by_target:
+            return target_pointing_error(control, qq, pp)
+        return pointing_error(spec, qq[None], pp if spec.pointing_reference == "orbital" else None)[0]
+
+    for j, e in enumerate(idx):
+        if failed[j]:
+            continue
+        body = bodies[j] if len(bodies) > 1 else bodies[0]
+        h = None if W is None else np.ascontiguousarray(W[j])
+        qj, Qj = np.ascontiguousarray(q[j]), np.ascontiguousarray(Q[j])
+        for name, v in study_outputs(sc, spec, potential, body, inertia[e], qj, Qj, h, pointing).items():
+            res[name][e] = v
 
 
 def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
@@ -325,12 +406,17 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
                               quaternion_order="w x y z")
         coords["quat_label"] = xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"})
     for name in spec.parameters:
-        # sampled in internal units; the inertia ones are written in kg m^2, as every output
+        # sampled in internal units (or a path's own unit); a kernel unit of the attitude family
+        # (the inertia parameters' kg km^2) is written in SI, as every output
         vals, unit = values[name], units[name]
         conv = LEGACY_OUTPUT.get(unit)
         if conv is not None:
             vals, unit = np.multiply(vals, conv[1]), conv[0]
-        coords[name] = cf_variable(("case",), vals, unit, f"sampled parameter: {PARAMETERS[name].long_name}")
+        if name in spec.paths:  # by its path: the coordinate named for it, the path as written
+            coords[coordinate_name(name)] = cf_variable(("case",), vals, unit,
+                                                        f"sampled parameter: scenario key {name}", scenario_key=name)
+        else:
+            coords[name] = cf_variable(("case",), vals, unit, f"sampled parameter: {PARAMETERS[name].long_name}")
     if axis is not None:
         coords["attitude_axis"] = cf_variable(("case", "axis"), axis, "1",
                                        "axis of the initial attitude perturbation (unit vector)", frame="B")
@@ -364,6 +450,7 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
         what = ("H = T + U" if spec.energy == "hamiltonian" else "the Jacobi integral H - n h.G")
         data["final_energy_error"] = cf_variable(("case",), res["energy_error"], "1", f"relative change of the conserved energy "
                                           f"(E(t_end) - E(t0)) / |E(t0)|, E = {what}")
+    data.update(_study_variables(sc, spec, UN, res, coords))
     data["integration_failed"] = cf_variable(("case",), res["failed"].astype(np.int8), "1",
                                       "1 where the integration of the case stopped (its values are NaN)",
                                       flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="ok failed")
@@ -374,6 +461,45 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
         ds = xr.Dataset(data, coords=coords)
     ds.attrs["integration_stats"] = json.dumps(stats, sort_keys=True)
     return ds
+
+
+def _study_variables(sc, spec, UN, res, coords):
+    """The Dataset variables of the study outputs in ``res`` (SI; adds the ``wheel``
+    coordinate to ``coords`` when a wheel output is there)."""
+    outs = set(spec.outputs)
+    data = {}
+    if "detumble_time" in outs:
+        data["detumble_time"] = cf_variable(("case",), res["detumble_time"], UN["time"],
+                                            "time after which |omega| stays below detumble_rate (NaN: never)",
+                                            detumble_rate=spec.detumble_rate, located="cubic through 4 outputs")
+    if "settling_time" in outs:
+        data["settling_time"] = cf_variable(("case",), res["settling_time"], UN["time"],
+                                            "time after which the pointing error stays below settling_angle (NaN: "
+                                            "never)", settling_angle_rad=spec.settling_angle,
+                                            located="cubic through 4 outputs")
+    if "pointing_error" in outs:
+        what = "over the last orbit, else the last 10 % of the run" if spec.window is None else \
+            f"over the last {spec.window:g} {UN['time']} of the run"
+        data["pointing_error_max"] = cf_variable(("case",), res["pointing_error_max"], "rad",
+                                                 f"largest pointing error {what}")
+        data["pointing_error_rms"] = cf_variable(("case",), res["pointing_error_rms"], "rad",
+                                                 f"root mean square pointing error {what} (output times)")
+    if {"max_wheel_speed", "wheel_saturated"} & outs:
+        coords["wheel"] = cf_variable(("wheel",), np.arange(len(sc.body.wheels)), "1", "reaction wheel index")
+    if "max_wheel_speed" in outs:
+        data["max_wheel_speed"] = cf_variable(("case", "wheel"), res["max_wheel_speed"], UN["rate"],
+                                              "largest |speed| of each wheel relative to the body (output times)")
+    if "wheel_saturated" in outs:
+        data["wheel_saturated"] = cf_variable(("case", "wheel"), res["wheel_saturated"], "1",
+                                              "a wheel reached max_speed or max_torque", flag_values=np.array(
+                                                  [-1, 0, 1], dtype=np.int8), flag_meanings="failed free saturated")
+    if "max_control_torque" in outs:
+        data["max_control_torque"] = cf_variable(("case",), res["max_control_torque"] * 1e6, "N m",
+                                                 "largest |torque| the control applied (output times)")
+    if "max_dipole" in outs:
+        data["max_dipole"] = cf_variable(("case",), res["max_dipole"] * 1e6, "A m^2",
+                                         "largest |B-dot dipole| (output times)")
+    return data
 
 
 def concat_cases(pieces):

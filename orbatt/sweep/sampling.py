@@ -14,7 +14,8 @@ import numpy as np
 
 from ..body import triangle_violation
 from ..errors import InputError
-from ..scenario.sweep_schema import INERTIA_PARAMETERS, PARAMETERS, SweepSpec, in_limits, limits_text
+from ..scenario.paths import leaf_quantity, resolve
+from ..scenario.sweep_schema import INERTIA_PARAMETERS, SweepSpec, definition, in_limits, limits_text
 
 __all__ = ["nominal_values", "nominal_rates", "draw_samples", "MAX_RESAMPLE_ROUNDS", "SAMPLING_VERSION"]
 
@@ -31,10 +32,16 @@ def nominal_values(scenario):
     w = nominal_rates(scenario)
     out.update({f"omega{k + 1}": float(w[k]) for k in range(3)})
     out["attitude_angle"] = 0.0
-    if spec.orbit is not None:
+    if spec.orbit is not None and spec.orbit["provider"] != "tle":  # a TLE's elements do not vary
         o = spec.orbit
         out.update(orbit_a=o["a"], orbit_e=o["e"], orbit_i=o["i"], orbit_raan=o["raan"], orbit_argp=o["argp"])
         out[f"orbit_{o['anomaly_kind']}"] = o["anomaly"]
+    if spec.sweep is not None and spec.sweep.paths:  # a path's nominal value: the file's, in the key's unit
+        import tomllib
+
+        data = tomllib.loads(scenario.text)
+        for path in spec.sweep.paths:
+            out[path] = leaf_quantity(resolve(data, path))[0]
     return out
 
 
@@ -47,7 +54,7 @@ def nominal_rates(scenario):
     return np.asarray(scenario.state0.omega, dtype=np.float64)
 
 
-def draw_samples(spec: SweepSpec, seed, nominal, unit_text):
+def draw_samples(spec: SweepSpec, seed, nominal, unit_text, check=None):
     """Every case's parameter values and attitude axes (``docs/sweeps.md``: Reproducibility).
 
     Parameters
@@ -59,6 +66,9 @@ def draw_samples(spec: SweepSpec, seed, nominal, unit_text):
         :func:`nominal_values` (internal units).
     unit_text : dict
         CF unit string of every parameter (for messages).
+    check : callable, optional
+        ``check(values, cases) -> (n,) bool``: the cases (indices) whose own scenario is
+        invalid (a sweep of scenario paths); they count as outside the limits, in each path.
 
     Returns
     -------
@@ -92,8 +102,14 @@ def draw_samples(spec: SweepSpec, seed, nominal, unit_text):
         axis /= np.sqrt(axis[:, 0] * axis[:, 0] + axis[:, 1] * axis[:, 1] + axis[:, 2] * axis[:, 2])[:, None]
     # physical limits
     resampled = np.zeros(n, dtype=bool)
+    unchecked = np.ones(n, dtype=bool)
     for _ in range(MAX_RESAMPLE_ROUNDS + 1):
-        bad = {name: ~in_limits(PARAMETERS[name], v) for name, v in values.items()}
+        bad = {name: ~in_limits(definition(name), v) for name, v in values.items()}
+        if check is not None:  # each case's own scenario must be valid (parameters given by path)
+            invalid = check(values, np.flatnonzero(unchecked))
+            unchecked[:] = False
+            for name in spec.paths:
+                bad[name] = bad[name] | invalid
         inertia = np.stack([values.get(k, np.full(n, nominal[k])) for k in INERTIA_PARAMETERS], axis=-1)
         tri = triangle_violation(inertia)
         if tri.any():
@@ -109,23 +125,30 @@ def draw_samples(spec: SweepSpec, seed, nominal, unit_text):
         fixable = {k for k, d in spec.random.items() if bad[k].any()}
         case = int(np.flatnonzero(any_bad)[0])
         if spec.on_invalid == "error" or not fixable or (tri.any() and not (set(spec.random) & set(INERTIA_PARAMETERS))):
-            raise InputError(_invalid_message(spec, values, bad, tri, case, nominal, unit_text))
+            raise InputError(_invalid_message(spec, values, bad, tri, case, nominal, unit_text, check))
         for k in spec.random:  # canonical order
             if k in fixable:
                 m = bad[k]
                 values[k][m] = spec.random[k].draw(rng, int(m.sum()), nominal[k])
                 resampled |= m
+                unchecked |= m
     else:
         raise InputError(f"[sweep] on_invalid: after {MAX_RESAMPLE_ROUNDS} rounds of resampling some samples are "
                          "still outside the physical limits; narrow the distributions (e.g. truncnormal)")
     return values, axis, int(resampled.sum())
 
 
-def _invalid_message(spec, values, bad, tri, case, nominal, unit_text):
+def _invalid_message(spec, values, bad, tri, case, nominal, unit_text, check=None):
     where = "[sweep.parameters]"
+    reason = getattr(check, "messages", {}).get(case)
+    if reason is not None:
+        drew = ", ".join(f"{name} = {values[name][case]:.6g} {'' if unit_text[name] == '1' else unit_text[name]}".rstrip()
+                         for name in spec.paths)
+        return (f"{where}: case {case} ({drew}) makes the scenario invalid: {reason}; narrow the distributions or set "
+                "[sweep] on_invalid = \"resample\"")
     for name, b in bad.items():
         if b[case] and not (tri[case] and name in INERTIA_PARAMETERS):
-            p = PARAMETERS[name]
+            p = definition(name)
             return (f"{where} {name}: case {case} drew {values[name][case]:.6g}, outside the physical range "
                     f"{limits_text(p, unit_text[name])}; narrow the distribution (truncnormal with low/high) or set "
                     "[sweep] on_invalid = \"resample\"")

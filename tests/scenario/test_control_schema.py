@@ -118,10 +118,14 @@ def test_control_without_an_orbit_is_refused():
         parse(text, "s.toml")
 
 
-def test_sweep_with_control_is_refused():
+def test_sweep_with_control_is_validated():
+    """Sweeps of controlled scenarios run (tests/sweep/test_sweep_any_scenario.py); their
+    [sweep] table is validated as any other."""
     text = WHEELS + '\n[sweep]\ncases = 4\n'
-    with pytest.raises(ScenarioError, match=r"\[sweep\].*\[control\]"):
+    with pytest.raises(ScenarioError, match=r"\[sweep\] cases: unknown key"):
         parse(text, "s.toml")
+    spec = parse(WHEELS + '\n[sweep]\n[sweep.parameters]\nomega1 = { values = ["0.1 deg/s"] }\n', "s.toml")
+    assert spec.sweep.cases == 1
 
 
 def test_bad_control_exits_2_with_one_line(tmp_path):

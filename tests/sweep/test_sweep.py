@@ -67,7 +67,8 @@ def test_shipped_sweep_validates_and_is_big_enough():
 KEP_SWEEP = '[sweep.parameters]\ninertia1 = { distribution = "normal", std = "4 kg km2" }\n'
 BAD = [
     ("unknown parameter", "samples = 3\n[sweep.parameters]\ninertia4 = { values = [\"1 kg km2\"] }\n",
-     r"\[sweep.parameters\] inertia4: unknown parameter; allowed: inertia1"),
+     r"\[sweep.parameters\] inertia4: unknown parameter; give a scenario path such as \"control.gain\" .* or one of "
+     r"inertia1"),
     ("unknown sweep key", "samples = 3\nseeds = 3\n" + KEP_SWEEP, r"\[sweep\] seeds: unknown key"),
     ("unknown distribution key", 'samples = 3\n[sweep.parameters]\ninertia1 = { distribution = "normal", sd = 1 }\n',
      r"\[sweep.parameters.inertia1\] sd: unknown key for a normal distribution"),
