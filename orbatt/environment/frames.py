@@ -25,7 +25,7 @@ from astropy import units as u
 
 from ..errors import InputError
 
-__all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "gcrs_to_itrs",
+__all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "rotation_gcrs_to_itrs_astropy", "gcrs_to_itrs",
            "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84"]
 
 #: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
@@ -97,6 +97,13 @@ def as_vectors(v, name, unit=None):
 def rotation_gcrs_to_itrs(t):
     """Rotation matrices ``R`` with ``x_ITRS = R x_GCRS``, shape ``(N, 3, 3)``.
 
+    The IAU 2006/2000A celestial-to-terrestrial matrix of ERFA (``erfa.c2t06a``: bias,
+    precession, nutation, Earth rotation angle, polar motion) at the instants' TT and UT1, with
+    the polar motion of astropy's bundled IERS table: what astropy's ``GCRS -> ITRS`` transform
+    of a geocentric position computes (agreement 3e-16 on a day of minutes), ~20x faster than
+    transforming basis vectors with astropy. Instants outside the IERS table go through
+    astropy's transform (its extrapolation and warnings).
+
     Parameters
     ----------
     t : astropy.time.Time
@@ -107,11 +114,28 @@ def rotation_gcrs_to_itrs(t):
     ndarray (N, 3, 3)
         Orthogonal to round-off; columns are the ITRS components of the GCRS basis vectors.
     """
-    from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
+    import erfa
+    from astropy.utils import iers
 
     t = as_time_array(t)
+    with offline_iers():
+        try:
+            xp, yp, status = iers.earth_orientation_table.get().pm_xy(t, return_status=True)
+            if np.all(np.asarray(status) >= 0):  # every instant inside the table
+                tt, ut1 = t.tt, t.ut1
+                R = erfa.c2t06a(tt.jd1, tt.jd2, ut1.jd1, ut1.jd2, xp.to_value(u.rad), yp.to_value(u.rad))
+                return np.ascontiguousarray(np.broadcast_to(R, (t.shape[0], 3, 3)))
+        except (ValueError, IndexError):  # astropy's own path below says what is wrong
+            pass
+    return rotation_gcrs_to_itrs_astropy(t)
+
+
+def rotation_gcrs_to_itrs_astropy(t):
+    """:func:`rotation_gcrs_to_itrs` through astropy's frame transform of the GCRS basis
+    vectors (1000 km long), for instants outside the IERS table (astropy extrapolates)."""
+    from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
+
     n = t.shape[0]
-    # three geocentric positions per instant: the GCRS basis vectors (1000 km long)
     tt = t[np.repeat(np.arange(n), 3)]
     basis = np.tile(np.eye(3) * 1000.0, (n, 1))
     with offline_iers():

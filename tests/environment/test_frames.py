@@ -60,3 +60,19 @@ def test_bad_inputs_name_the_argument():
         frames.gcrs_to_itrs(T, np.zeros((3, 3)))
     with pytest.raises(InputError, match="t: expected an astropy Time"):
         frames.gcrs_to_itrs(0.0, np.zeros((1, 3)))
+
+
+def test_erfa_rotation_is_astropys_transform():
+    """The fast GCRS -> ITRS matrix (ERFA's c2t06a with the IERS table's UT1 and polar motion)
+    against astropy's own frame transform of the basis vectors, over a day."""
+    import astropy.units as u
+    from astropy.time import Time
+
+    from orbatt.environment import frames
+
+    t = Time("2025-03-20T00:00:00", scale="utc") + np.linspace(0.0, 86400.0, 97) * u.s
+    fast = frames.rotation_gcrs_to_itrs(t)
+    slow = frames.rotation_gcrs_to_itrs_astropy(t)
+    assert np.abs(fast - slow).max() < 1e-14
+    np.testing.assert_allclose(np.einsum("nij,nkj->nik", fast, fast), np.broadcast_to(np.eye(3), fast.shape),
+                               atol=1e-15)
