@@ -3,7 +3,7 @@
 
 They are the files an earlier orbatt wrote: attitude quantities in kg km^2 (s^-1, s^-2), the
 time coordinate as float ``seconds since <epoch>`` (year 0001 without an epoch), no
-``elapsed`` coordinate. ``tests/dataset/test_dataset_legacy.py`` opens them.
+``elapsed`` coordinate. ``tests/dataset/test_si_time_axis.py`` opens them in the current form.
 
     python tests/data/legacy/make_legacy.py tests/data/legacy
 """
