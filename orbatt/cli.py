@@ -354,9 +354,17 @@ def _cmd_plot(args):
     check_figure_folder(args.output, Path(args.file).stem, what="-o", figures=())  # the folder, before reading
     ds = open_dataset(src, load=True)
     if "time" not in ds.dims or "omega" not in ds.variables:
-        raise InputError(f"file: {args.file!r} is a sweep result of per-case reductions, no time histories; "
-                         "orbatt plot draws time histories: add \"trajectory\" to [sweep] outputs and rerun the sweep, "
-                         "or plot its reductions in Python")
+        if "sweep_format" not in ds.attrs or "case" not in ds.dims:
+            raise InputError(f"file: {args.file!r} has neither time histories nor per-case outputs; give the "
+                             "output of 'orbatt run' or 'orbatt sweep'")
+        from .dataset.figure_files import write_figures
+        from .dataset.sweep_figures import SWEEP_FIGURES, draw_sweep
+
+        # a sweep's per-case outputs: their distributions and their scatter against the parameters
+        for f in write_figures(ds, args.output, Path(args.file).stem, what="-o", figures=SWEEP_FIGURES,
+                               draw_figure=draw_sweep):
+            print(f)
+        return 0
     _check_variables(ds, args.file, RUN_VARIABLES, "a run result")
     for note in figure_notes(ds):
         print(f"orbatt: note: {note}", file=sys.stderr)

@@ -43,11 +43,16 @@ def test_every_shipped_scenario_is_tested():
 
 
 @pytest.mark.parametrize("name", sorted(SHORT))
-def test_shipped_scenario_runs_from_the_cli(name, tmp_path):
+def test_shipped_scenario_runs_from_the_cli(name, tmp_path, capsys):
+    """Every shipped scenario through the command line's own entry point, in this process (the
+    commands in a process of their own: test_run_plot_and_plot_command and the cold-start tests;
+    one process per scenario cost ~3 s of imports each)."""
+    from orbatt.cli import main
+
     path = shorten(SCEN / f"{name}.toml", tmp_path)
     out = tmp_path / f"{name}.nc"
-    r = cli("run", path, "-o", out, "--quiet")
-    assert r.returncode == 0, r.stderr
+    code = main(["run", str(path), "-o", str(out), "--quiet"])
+    assert code == 0, capsys.readouterr().err
     ds = orbatt.open_dataset(out)
     assert ds.attrs["scenario"] == path.read_text()
     assert ds["time"].size >= 2
@@ -55,8 +60,10 @@ def test_shipped_scenario_runs_from_the_cli(name, tmp_path):
     assert np.max(np.abs(ds["q_norm_error"].values)) < 1e-9
     qQ = ds["qQ"].values
     assert np.max(np.abs(qQ - qQ[0])) < 1e-9 * float(np.max(np.abs(ds["Q"].values)))
-    info = cli("info", out)
-    assert info.returncode == 0 and "span" in info.stdout and "q.Q" in info.stdout
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    info = capsys.readouterr().out
+    assert "span" in info and "q.Q" in info
 
 
 def test_run_plot_and_plot_command(tmp_path):

@@ -142,7 +142,7 @@ def figure_notes(ds):
     return []
 
 
-def write_figures(ds, folder, stem, *, what="--plot", figures=None, time="auto", dpi=120):
+def write_figures(ds, folder, stem, *, what="--plot", figures=None, time="auto", dpi=120, draw_figure=None):
     """Write the figures of ``ds`` as ``folder/<stem>-<figure>.png``, atomically.
 
     Parameters
@@ -160,6 +160,9 @@ def write_figures(ds, folder, stem, *, what="--plot", figures=None, time="auto",
     time : {"auto", "utc", "orbits", "time"}
         The time axis.
     dpi : int
+    draw_figure : callable, optional
+        ``draw_figure(ds, figure) -> matplotlib Figure`` (default: the run figures of
+        :mod:`orbatt.dataset.figures`; a sweep's: :func:`orbatt.dataset.sweep_figures.draw_sweep`).
 
     Returns
     -------
@@ -192,7 +195,7 @@ def write_figures(ds, folder, stem, *, what="--plot", figures=None, time="auto",
                           "give a writable folder") from None
     written = []
     for figure in chosen:
-        fig = draw(ds, figure, time=time)
+        fig = draw(ds, figure, time=time) if draw_figure is None else draw_figure(ds, figure)
         try:
             with replacing(paths[figure]) as tmp:
                 fig.savefig(tmp, format="png", dpi=dpi, metadata={"Software": f"{SOFTWARE} {__version__}"})

@@ -25,7 +25,7 @@ from astropy import units as u
 
 from ..errors import InputError
 
-__all__ = ["offline_iers", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "rotation_gcrs_to_itrs_astropy", "gcrs_to_itrs",
+__all__ = ["offline_iers", "load_earth_orientation", "earth_orientation_cache", "as_time_array", "as_vectors", "rotation_gcrs_to_itrs", "rotation_gcrs_to_itrs_astropy", "gcrs_to_itrs",
            "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84"]
 
 #: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
@@ -40,11 +40,74 @@ EARTH_ROTATION_RATE = 7.292115e-5
 def offline_iers():
     """Context in which astropy uses only its bundled Earth orientation tables: no download
     (``iers.conf.auto_download = False``) and no error for predictions older than 30 days
-    (``auto_max_age = None``)."""
+    (``auto_max_age = None``); the table itself parsed once per installation
+    (:func:`load_earth_orientation`)."""
     from astropy.utils import iers
 
     with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
+        load_earth_orientation()
         yield
+
+
+#: where this process's Earth orientation table came from: None (not loaded yet), "cache" or
+#: "astropy" (parsed, and the cache written)
+EOP_SOURCE = None
+
+
+def earth_orientation_cache():
+    """The cache file of the parsed Earth orientation table, named for the astropy and
+    ``astropy-iers-data`` versions that made it."""
+    import hashlib
+
+    import astropy
+
+    try:
+        from importlib.metadata import version
+
+        data = version("astropy-iers-data")
+    except Exception:  # noqa: BLE001 - no such distribution: astropy's own version names it
+        data = "?"
+    key = hashlib.sha1(f"{astropy.__version__}|{data}".encode()).hexdigest()[:16]
+    from ..cachedir import cache_folder
+
+    return cache_folder() / f"iers-{key}.pickle"
+
+
+def load_earth_orientation():
+    """Make astropy's Earth orientation table (UT1 - UTC, polar motion) this process's, from
+    orbatt's cache when it is there: astropy parses its bundled text table in ~1-2.5 s at the
+    first UT1 of each process; the parsed table is kept as a pickle beside numba's cache
+    (:func:`earth_orientation_cache`, written atomically; an unreadable one is parsed again).
+    Call inside :func:`offline_iers`'s settings."""
+    global EOP_SOURCE
+    if EOP_SOURCE is not None:
+        return
+    import os
+    import pickle
+
+    from astropy.utils import iers
+
+    path = earth_orientation_cache()
+    table = None
+    try:
+        table = pickle.loads(path.read_bytes())
+        if not isinstance(table, iers.IERS):
+            table = None
+    except Exception:  # noqa: BLE001 - missing or unreadable: parse the table again
+        table = None
+    if table is not None:
+        iers.earth_orientation_table.set(table)
+        EOP_SOURCE = "cache"
+        return
+    table = iers.earth_orientation_table.get()
+    EOP_SOURCE = "astropy"
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_bytes(pickle.dumps(table, protocol=pickle.HIGHEST_PROTOCOL))
+        os.replace(tmp, path)
+    except OSError:  # a read-only cache: parse in every process
+        pass
 
 
 def as_time_array(t, n=None, name="t"):
