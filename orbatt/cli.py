@@ -424,9 +424,11 @@ def summary(ds, title="", wall=None) -> str:
 
     settings = json.loads(ds.attrs.get("method_settings", "{}"))  # as ds.orbatt.settings, .stats
     stats = json.loads(ds.attrs.get("integration_stats", "{}"))
-    t = ds["time"].values
+    from .dataset.timeaxis import elapsed_unit, elapsed_values
+
+    t = elapsed_values(ds)
     lines = [title] if title else []
-    tu = ds["time"].attrs.get("units", "")
+    tu = elapsed_unit(ds)
     tu = "(dimensionless)" if tu == "1" else tu
     lines.append(f"  span        {t[0]:.6g} .. {t[-1]:.6g} {tu} ({t.size} outputs)"
                  + (f", epoch {ds.attrs['epoch']}" if "epoch" in ds.attrs else ""))
@@ -443,7 +445,9 @@ def summary(ds, title="", wall=None) -> str:
                  f"(relative {rel:.3e}){note}")
     lines.append(f"  |q| - 1     max {np.max(np.abs(ds['q_norm_error'].values)):.3e}")
     qQ = ds["qQ"].values
-    lines.append(f"  q.Q         max drift {np.max(np.abs(qQ - qQ[..., :1])):.3e} (initial {qQ.ravel()[0]:.3e})")
+    qu = ds["qQ"].attrs.get("units", "")
+    qu = "" if qu in ("1", "") else f" {qu}"
+    lines.append(f"  q.Q         max drift {np.max(np.abs(qQ - qQ[..., :1])):.3e}{qu} (initial {qQ.ravel()[0]:.3e})")
     if wall is not None:
         lines.append(f"  wall time   {wall:.3f} s (total, including setup and Dataset)")
     if not int(ds.attrs.get("integration_complete", 1)):

@@ -1,7 +1,8 @@
 """The canonical state ``(q, Q)`` of a rigid body, validated, built from what users know.
 
 Frames and units: ``q`` maps body to space components (:mod:`orbatt.quaternion`); ``Q`` is
-in the body's momentum unit (kg km^2 s^-1, or plain numbers for a dimensionless body).
+in the body's momentum unit, the kernels' (kg km^2 s^-1, or plain numbers for a
+dimensionless body); a State prints ``Q`` in SI (kg m^2 s^-1), as every output gives it.
 A state may hold a batch: ``q`` and ``Q`` of shape ``(..., 4)``.
 """
 from __future__ import annotations
@@ -157,4 +158,10 @@ class State:
         return np.concatenate([q, Q], axis=-1)
 
     def __repr__(self):
-        return f"State(q={self.q.tolist()}, Q={self.Q.tolist()})"
+        """``State(q=[...], Q=[...] kg m^2 s^-1)``: ``Q`` printed in SI (the unit every
+        output uses, :data:`orbatt.units.DIMENSIONAL_UNITS`), or as plain numbers for a
+        dimensionless body; :attr:`Q` itself stays in the kernels' unit."""
+        if self.body.dimensionless:
+            return f"State(q={self.q.tolist()}, Q={self.Q.tolist()})"
+        Q = U.to_output(self.Q, "momentum")
+        return f"State(q={self.q.tolist()}, Q={Q.tolist()} {U.DIMENSIONAL_UNITS['momentum']})"

@@ -6,6 +6,12 @@ kg km^2 s^-1, energies in kg km^2 s^-2, GM in km^3 s^-2) and attaches these unit
 output. A *dimensionless* problem (inertia given as plain numbers, like the paper's
 Sects. 6.1-6.2) keeps plain numbers throughout and says so with unit ``"1"``.
 
+Outputs (Datasets, files, printed states) give the attitude family in SI: inertia in
+kg m^2, momenta in kg m^2 s^-1, energies in J (:data:`DIMENSIONAL_UNITS`), each the kernel's
+value times :data:`OUTPUT_SCALE` (``1e6``: km^2 -> m^2), applied once at the Dataset boundary
+(:func:`to_output`); orbit positions stay in km. Files of earlier versions wrote the kernel
+units; :data:`LEGACY_OUTPUT` says how their values are scaled on reading.
+
 The unit strings orbatt writes (the ``units`` attribute of every Dataset variable) come from
 the one table here: :data:`CF_UNITS` (CF/UDUNITS spellings and the astropy unit each parses
 to), :data:`DIMENSIONAL_UNITS` / :data:`DIMENSIONLESS_UNITS` (the spelling of each quantity
@@ -58,6 +64,7 @@ CF_UNITS = {
     "kg km^2 s^-1": u.kg * u.km**2 / u.s,
     "kg m^2 s^-1": u.kg * u.m**2 / u.s,
     "kg km^2 s^-2": u.kg * u.km**2 / u.s**2,
+    "kg m^2 s^-2": u.kg * u.m**2 / u.s**2,
     "J": u.J,
     "km^3 s^-2": u.km**3 / u.s**2,
 }
@@ -71,13 +78,52 @@ CF_TIME_UNITS = {"seconds": u.s, "second": u.s, "secs": u.s, "sec": u.s, "s": u.
                  "minutes": u.min, "minute": u.min, "min": u.min, "hours": u.h, "hour": u.h,
                  "h": u.h, "days": u.day, "day": u.day, "d": u.day}
 
-#: CF spelling of the internal unit system by quantity kind (the ``units`` attribute orbatt
-#: writes for a dimensional problem)
-DIMENSIONAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s^-1", "inertia": "kg km^2",
-                     "momentum": "kg km^2 s^-1", "energy": "kg km^2 s^-2", "length": "km",
+#: CF spelling of the internal unit system by quantity kind (the kernels' units: what
+#: :func:`strip` gives, and what sweep parameters are sampled in)
+INTERNAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s^-1", "inertia": "kg km^2",
+                  "momentum": "kg km^2 s^-1", "energy": "kg km^2 s^-2", "length": "km",
+                  "speed": "km s^-1", "one": "1"}
+#: CF spelling by quantity kind of what orbatt writes for a dimensional problem (the
+#: ``units`` attribute of a Dataset variable): SI for the attitude family (kg m^2,
+#: kg m^2 s^-1, J), km and km s^-1 for orbit positions and velocities
+DIMENSIONAL_UNITS = {"time": "s", "angle": "rad", "rate": "rad s^-1", "inertia": "kg m^2",
+                     "momentum": "kg m^2 s^-1", "energy": "J", "length": "km",
                      "speed": "km s^-1", "one": "1"}
 #: the same for a dimensionless problem: ``"1"`` everywhere except angles (``"rad"``)
 DIMENSIONLESS_UNITS = {k: ("rad" if k == "angle" else "1") for k in DIMENSIONAL_UNITS}
+#: output value = internal value * factor, by quantity kind (dimensional problems; kinds not
+#: listed keep their values): kg km^2 -> kg m^2 is exactly a factor 10^6
+OUTPUT_SCALE = {"inertia": 1e6, "momentum": 1e6, "energy": 1e6}
+#: ``units`` attributes written by orbatt <= 0.3.0.dev0 for the attitude family (kernel units,
+#: with or without ``^``) -> ``(the SI spelling written now, the factor its values take)``
+LEGACY_OUTPUT = {}
+for _kind in OUTPUT_SCALE:
+    for _spelling in (INTERNAL_UNITS[_kind], INTERNAL_UNITS[_kind].replace("^", "")):
+        LEGACY_OUTPUT[_spelling] = (DIMENSIONAL_UNITS[_kind], OUTPUT_SCALE[_kind])
+del _kind, _spelling
+
+
+def to_output(values, kind, dimensionless=False):
+    """Values of quantity kind ``kind`` in internal units as written (SI for the attitude
+    family, :data:`OUTPUT_SCALE`).
+
+    Parameters
+    ----------
+    values : ndarray
+        In the internal unit of ``kind`` (:data:`INTERNAL_UNITS`).
+    kind : str
+        A key of :data:`DIMENSIONAL_UNITS`.
+    dimensionless : bool
+        A dimensionless problem keeps its plain numbers (``values`` is returned as it is).
+
+    Returns
+    -------
+    ndarray
+        ``values * OUTPUT_SCALE[kind]`` (a new array), or ``values`` itself where no factor
+        applies; in the unit ``DIMENSIONAL_UNITS[kind]``.
+    """
+    factor = None if dimensionless else OUTPUT_SCALE.get(kind)
+    return values if factor is None else np.multiply(values, factor)
 
 
 def _require_unit(value, unit, name, allow_plain):

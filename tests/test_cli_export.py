@@ -88,7 +88,7 @@ def test_run_writes_the_aem_of_the_result(result):
     q, frame = seg.body_attitude
     assert frame == "EME2000" and seg.metadata["TIME_SYSTEM"] == "UTC"
     assert np.array_equal(q, ds["q"].values)                      # bit for bit
-    np.testing.assert_allclose(seg.seconds_since(EPOCH), ds["time"].values, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(seg.seconds_since(EPOCH), ds["elapsed"].values, rtol=0, atol=1e-9)
     assert A.is_orbatt_aem(aem) and not A.is_orbatt_aem(nc)
     assert not [p for p in folder.iterdir() if p.name.startswith(".tmp-")]
 

@@ -202,7 +202,7 @@ def test_scenario_with_a_tle_file_relative_to_the_scenario(tmp_path):
     assert isinstance(sc.orbit, TleOrbit) and sc.orbit.title == "ISS (ZARYA)"
     ds = sc.run()
     assert ds.attrs["epoch"].startswith("2019-12-09T17:00:00")
-    ref_pos, _ = direct_gcrs(L1, L2, Time("2019-12-09T17:00:00", scale="utc"), ds["time"].values)
+    ref_pos, _ = direct_gcrs(L1, L2, Time("2019-12-09T17:00:00", scale="utc"), ds["elapsed"].values)
     assert np.abs(ds["position"].values - ref_pos).max() < 1e-3
     path.write_text(SCEN.format(orbit='tle_file = "missing.tle"', t_end="0.1 orbits"))
     with pytest.raises(InputError, match="tle_file: cannot read"):

@@ -112,7 +112,7 @@ def test_tle_epoch_dates_the_environment_and_the_orbit_covers_the_margin(disturb
     assert ds.attrs["epoch"].startswith(TLE_EPOCH)           # no [orbit] epoch: the TLE's
     margin = sample_margin(drag=True, srp=True, magnetic=True)
     assert margin == 3600.0                                  # SRP's Sun table, the coarsest
-    t_end = float(ds["time"].values[-1])
+    t_end = float(ds["elapsed"].values[-1])
     assert sc.orbit.time_span == (-margin, t_end + margin)
     assert sc.potential.time_span == (0.0, t_end)
     _check_constraints(ds)
@@ -139,7 +139,7 @@ def test_drag_torque_is_r_cross_f_from_the_datasets_density_velocity_and_attitud
 
 def test_srp_and_magnetic_torques_from_the_datasets_fields(disturbed):
     sc, ds = disturbed
-    q, t = ds["q"].values, ds["time"].values
+    q, t = ds["q"].values, ds["elapsed"].values
     pos = ds["position"].values
     sun = np.asarray(esun.sun_position(sc.orbit.epoch + t * u.s))      # km, GCRS
     scale = (esun.AU / np.linalg.norm(sun - pos, axis=1)) ** 2
@@ -170,7 +170,7 @@ def test_python_tle_sampled_over_the_run_only_gives_the_same_torques(disturbed):
     gravity gradient 1.9e-8, drag 5.9e-6 (the density's altitude gradient, 1 / 60 km),
     SRP 1.0e-12, magnetic 1.9e-8."""
     sc, ds = disturbed
-    t, q = ds["time"].values, ds["q"].values
+    t, q = ds["elapsed"].values, ds["q"].values
     orbit = TleOrbit([L1, L2], t[-1] * u.s)
     assert orbit.time_span == (0.0, t[-1])
     env = EnvironmentTorques(orbit, t[-1] * u.s, facets=[Facet(a * u.m**2, n, p * u.m, cd, s, d)
@@ -192,7 +192,7 @@ def test_bdot_on_a_tle_detumbles_with_m_cross_b(tmp_path):
     _check_constraints(ds)
     assert ds.attrs["epoch"].startswith(TLE_EPOCH)
     assert sc.orbit.time_span[0] == -sample_margin(magnetic=True)
-    q, t = ds["q"].values, ds["time"].values
+    q, t = ds["q"].values, ds["elapsed"].values
     pos = ds["position"].values
     B = _body_vectors(q, IGRFField().field(sc.orbit.epoch + t * u.s, pos))   # T, body axes
     m = ds["dipole_control"].values

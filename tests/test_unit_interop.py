@@ -1,5 +1,7 @@
 """Every variable of every shipped scenario's output file reads in the unit libraries of the
 tools users open it with: astropy, UDUNITS-2 (CF) and pint (also through pint-xarray)."""
+import warnings
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -42,23 +44,39 @@ def test_pint_xarray_quantifies_every_variable(shipped_outputs):
 
 
 def test_time_is_cf_and_round_trips_in_xarray_and_orbatt(shipped_outputs):
+    """One time axis (issue 26): orbatt.open_dataset and plain xarray give the same ``time``
+    (datetime64 UTC, on the nominal epoch without one) and ``elapsed`` (float seconds),
+    without a warning; a normalized scenario keeps plain numbers in both."""
     from astropy.time import Time
 
-    from orbatt.dataset.netcdf import NOMINAL_REFERENCE
+    from orbatt.dataset.build import NOMINAL_EPOCH
 
     for name, path in shipped_outputs.items():
-        ours = orbatt.open_dataset(path, load=True)
-        assert ours["time"].attrs["units"] in ("s", "1")
-        assert ours["time"].attrs["standard_name"] == "time" and ours["time"].attrs["axis"] == "T"
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            ours = orbatt.open_dataset(path, load=True)
+            with xr.open_dataset(path) as plain:
+                plain = plain.load()
         with xr.open_dataset(path, decode_times=False) as raw:
             units = raw["time"].attrs["units"]
+            assert np.array_equal(raw["time"].values, ours["elapsed"].values), name  # the file: elapsed s
+        assert ours["time"].attrs["axis"] == "T"
+        assert ours["time"].dtype == plain["time"].dtype and ours["time"].attrs == plain["time"].attrs, name
+        assert np.array_equal(ours["time"].values, plain["time"].values), name
+        assert np.array_equal(ours["elapsed"].values, plain["elapsed"].values), name
+        if units == "1":
+            assert ours["time"].dtype == np.float64 and ours["elapsed"].attrs["units"] == "1", name
+            continue
+        assert ours["time"].dtype == np.dtype("datetime64[ns]") and ours["time"].attrs["standard_name"] == "time"
+        assert ours["elapsed"].attrs["units"] == "s"
         if "epoch" in ours.attrs:
             assert units == f"seconds since {ours.attrs['epoch']}"
-            with xr.open_dataset(path) as ds:  # plain xarray decodes UTC datetimes
-                dates = Time(ds["time"].values[[0, -1]].astype("datetime64[ns]"), scale="utc")
-            expect = Time(ours.attrs["epoch"], scale="utc") + ours["time"].values[[0, -1]] * u.s
-            # cftime ignores leap seconds (units_metadata says how orbatt counts them): none
+            dates = Time(ours["time"].values[[0, -1]], scale="utc")
+            expect = Time(ours.attrs["epoch"], scale="utc") + ours["elapsed"].values[[0, -1]] * u.s
+            # datetime64 ignores leap seconds (units_metadata says how orbatt counts them): none
             # falls inside a shipped run, so the dates agree to the microsecond
             assert np.all(np.abs((dates - expect).to_value(u.s)) < 1e-6), name
-        elif units != "1":
-            assert units == f"seconds since {NOMINAL_REFERENCE}" and "epoch" not in ours.attrs, name
+        else:
+            assert units == f"seconds since {NOMINAL_EPOCH}" and "epoch" not in ours.attrs, name
+            assert ours["time"].values[0] == np.datetime64(NOMINAL_EPOCH.rstrip("Z"), "ns") + \
+                np.timedelta64(int(round(ours["elapsed"].values[0] * 1e9)), "ns")

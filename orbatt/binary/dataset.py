@@ -1,16 +1,18 @@
 """The result Dataset of a binary run (:func:`binary_content`): the relative orbit, both
-attitudes, the invariants and the osculating elements, with CF units (kg km s rad, the
-spellings of :data:`orbatt.units.DIMENSIONAL_UNITS`) and ``long_name`` on every variable.
+attitudes, the invariants and the osculating elements, with CF units and ``long_name`` on
+every variable: computed in the kernels' kg km s rad, written as every result is
+(:mod:`orbatt.dataset.build`): momenta in kg m^2 s^-1, energies in J, orbits in km.
 
-Variables (``time`` in s since the start; ``axis`` 1..3 of the frame named by ``frame``)::
+Variables (``time``: datetimes on the nominal epoch 2000-01-01T00:00:00Z, ``elapsed`` in s
+since the start; ``axis`` 1..3 of the frame named by ``frame``)::
 
     position, velocity          relative orbit primary -> secondary, inertial (km, km s^-1)
     separation                  |position| (km)
     q, Q, omega                 the secondary's attitude (B -> S), momentum, body rate
     q_primary, Q_primary,       the rigid primary's (absent for a point-mass primary)
     omega_primary
-    energy                      total H (kg km^2 s^-2), conserved with the coupled potential
-    angular_momentum_total      r x p + both spins, inertial (kg km^2 s^-1), conserved
+    energy                      total H (J), conserved with the coupled potential
+    angular_momentum_total      r x p + both spins, inertial (kg m^2 s^-1), conserved
     orbit_a, orbit_e, orbit_i,  osculating elements of the relative orbit about G (M1 + M2)
     orbit_period
     q_norm_error, qQ            the secondary's constraint residuals |q| - 1 and q.Q
@@ -26,9 +28,10 @@ from .. import canonical as cn
 from ..core import mutual as km
 from .. import quaternion as qt
 from ..dataset.build import (AXIS_INDEX, AXIS_LABELS, EULER_313_LABELS, QUAT_INDEX, QUAT_LABELS, QUATERNION_ORDER,
-                             global_attrs)
+                             global_attrs, si_form)
 from ..dataset.content import Content, Var
-from ..units import DIMENSIONAL_UNITS as UN
+from ..dataset.timeaxis import cf_time_attrs, elapsed_attrs
+from ..units import INTERNAL_UNITS as UN
 from .system import osculating_elements
 
 __all__ = ["binary_content", "binary_dataset"]
@@ -76,7 +79,9 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
     norm_err, qQ = cn.constraint_residuals(q, Q)
     td, vd, qd = ("time",), ("time", "axis"), ("time", "quat")
     coords = {
-        "time": Var(td, t, {"units": "s", "long_name": "time since the start", "standard_name": "time", "axis": "T"}),
+        # the one time axis of every result (orbatt.dataset.build): on the nominal epoch
+        "time": Var(td, t, cf_time_attrs(None, False)),
+        "elapsed": Var(td, t, elapsed_attrs(None, False)),
         "quat": _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
         "quat_label": Var(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"}),
@@ -123,7 +128,7 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
                          dimensionless=False, complete=traj.complete, scenario_text=scenario_text,
                          title=title or "orbatt: binary asteroid (coupled orbit and attitudes)",
                          binary=json.dumps(describe(s)))
-    return Content(data, coords, attrs)
+    return Content(si_form(data), coords, attrs)  # computed in kernel units, written in SI
 
 
 def binary_dataset(traj, **kw):

@@ -11,8 +11,10 @@ Layout (``docs/design.md`` §6)
 Dimensions and their coordinates (every coordinate is numeric, as CF requires of coordinate
 variables; the names are in a label coordinate beside it):
 
-* ``time`` - float64 time since the epoch: ``s`` (dimensional problems) or ``1``
-  (dimensionless ones);
+* ``time`` - ``datetime64[ns]`` UTC (the epoch, or the nominal epoch 2000-01-01T00:00:00Z
+  of a run without one, plus the elapsed seconds), with the coordinate ``elapsed`` beside
+  it: float64 seconds since the epoch, for arithmetic; a dimensionless problem has float64
+  numbers in its own time unit (``1``) in both (:mod:`orbatt.dataset.build`: the time axis);
 * ``quat`` - ``0 1 2 3``, labels ``w x y z`` (``quat_label``): quaternion component,
   **scalar first**, ``0`` is the paper's ``q0`` (the scalar ``w``);
 * ``axis`` - ``1 2 3``, labels ``x y z`` (``axis_label``): component along axis 1, 2, 3 of
@@ -39,9 +41,11 @@ Variables: ``q``, ``Q`` (the canonical state), ``omega``, ``g`` (body), ``G`` (s
 ``true_anomaly``, ``position``, ``velocity`` (in ``S``), ``q_orbital = p~ q`` (``B`` relative to
 ``O``) and ``euler_321`` (its roll, pitch, yaw about ``o2, o3, o1``; :func:`orbatt.orbital.lvlh_angles`).
 
-Units: dimensional problems use orbatt's internal system (kg, km, s, rad; :mod:`orbatt.units`),
-dimensionless ones ``"1"`` everywhere except angles (``"rad"``). Every ``units`` attribute is a
-CF/UDUNITS spelling from :data:`orbatt.units.CF_UNITS` that :class:`astropy.units.Unit` parses.
+Units: dimensional problems write the attitude family in SI (inertia kg m^2, momenta
+kg m^2 s^-1, energies J, torques N m; :data:`orbatt.units.DIMENSIONAL_UNITS`) and orbit
+positions in km; dimensionless ones ``"1"`` everywhere except angles (``"rad"``). Every
+``units`` attribute is a CF/UDUNITS spelling from :data:`orbatt.units.CF_UNITS` that
+:class:`astropy.units.Unit` parses.
 
 Global attributes: ``Conventions = "CF-1.11"``, ``title``, ``source``, ``references``,
 ``orbatt_version``, ``method``, ``method_settings`` and ``integration_stats`` (JSON text),
@@ -51,10 +55,10 @@ Global attributes: ``Conventions = "CF-1.11"``, ``title``, ``source``, ``referen
 
 NetCDF (:func:`write_netcdf`, :func:`open_dataset`): float64 stored losslessly (zlib + shuffle),
 chunked along an unlimited ``time`` dimension, so that :class:`NetCDFWriter` (or
-``write_netcdf(..., append=True)``) can add samples as a long run goes. In the file the time
-coordinate of a problem with an epoch has the CF encoding ``units = "seconds since <epoch>"``,
-``calendar = "standard"`` (plain :func:`xarray.open_dataset` decodes it to datetimes);
-:func:`open_dataset` gives back the in-memory form (``units = "s"``) bit for bit.
+``write_netcdf(..., append=True)``) can add samples as a long run goes. In the file ``time``
+has the CF encoding ``units = "seconds since <epoch>"``, ``calendar = "standard"``; plain
+:func:`xarray.open_dataset` and :func:`open_dataset` both give back the in-memory form bit for
+bit (files of earlier versions: :func:`open_dataset` converts them).
 """
 from __future__ import annotations
 

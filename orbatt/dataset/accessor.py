@@ -16,6 +16,7 @@ from ..units import parse_unit, unit_string
 from . import plots
 from .aem import write_aem
 from .netcdf import write_netcdf
+from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["OrbattAccessor"]
 
@@ -31,8 +32,8 @@ class OrbattAccessor:
         """What the Dataset holds, with units: title, unit system, outputs and span, the
         epoch, the method, the orbit, the cases of an ensemble or sweep."""
         ds, a = self._ds, self._ds.attrs
-        t = ds["time"].values
-        tu = ds["time"].attrs.get("units", "")
+        t = elapsed_values(ds)
+        tu = elapsed_unit(ds)
         span = f"{t[0]:.6g} .. {t[-1]:.6g}" if t.size else "empty"
         lines = [f"<orbatt Dataset: {a.get('title', 'orbatt result')}>",
                  f"  units:   {a.get('unit_system', '?')}",
@@ -52,7 +53,10 @@ class OrbattAccessor:
 
     # units ------------------------------------------------------------------------------
     def unit(self, name):
-        """astropy unit of variable ``name`` (from its ``units`` attribute)."""
+        """astropy unit of variable ``name`` (from its ``units`` attribute; ``"time"``: the
+        unit of ``elapsed``, s or dimensionless, :meth:`quantity`)."""
+        if name == "time":
+            return parse_unit(elapsed_unit(self._ds))
         if name not in self._ds.variables:
             raise InputError(f"name: {name!r} is not a variable of this dataset; have "
                              f"{sorted(self._ds.variables)}")
@@ -67,9 +71,12 @@ class OrbattAccessor:
         Parameters
         ----------
         name : str
-            A data variable or numeric coordinate (``"omega"``, ``"time"``, ...).
+            A data variable or numeric coordinate (``"omega"``, ``"elapsed"``, ...);
+            ``"time"`` gives the ``elapsed`` values (``time`` itself holds datetimes).
         """
         unit = self.unit(name)
+        if name == "time":
+            return elapsed_values(self._ds) * unit
         return np.asarray(self._ds[name].values) * unit
 
     def to(self, name, unit) -> xr.DataArray:
@@ -78,6 +85,7 @@ class OrbattAccessor:
         Parameters
         ----------
         name : str
+            A variable; ``"time"`` converts ``elapsed`` (``time`` holds datetimes).
         unit : str or astropy Unit
             E.g. ``"degree s-1"``, ``"deg/s"`` or ``u.deg / u.s`` for ``omega``.
 
@@ -87,6 +95,8 @@ class OrbattAccessor:
             The units are not convertible (e.g. a dimensionless problem's ``"1"`` to
             ``"deg/s"``).
         """
+        if name == "time":  # time holds datetimes: its numbers are elapsed's
+            name = "elapsed"
         target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
         src = self.unit(name)
         try:
@@ -110,8 +120,8 @@ class OrbattAccessor:
     # metadata ---------------------------------------------------------------------------
     @property
     def dimensionless(self) -> bool:
-        """True for a dimensionless problem (``time`` in units ``"1"``)."""
-        return self._ds["time"].attrs.get("units") == "1"
+        """True for a dimensionless problem (``elapsed`` and ``time`` in units ``"1"``)."""
+        return elapsed_unit(self._ds) == "1"
 
     @property
     def epoch(self):
@@ -120,8 +130,8 @@ class OrbattAccessor:
         return parse_epoch(str(s)) if s else None
 
     def times(self):
-        """Absolute times (:class:`astropy.time.Time`) if there is an epoch, else the ``time``
-        Quantity."""
+        """Absolute times (:class:`astropy.time.Time`: the epoch plus ``elapsed``, leap seconds
+        counted) if there is an epoch, else the ``elapsed`` Quantity."""
         ep = self.epoch
         tq = self.quantity("time")
         return tq if ep is None else ep + tq

@@ -38,8 +38,8 @@ Example (90 degrees, tested): a body turned by +90 degrees about ``s3`` (so ``b1
 The attitude relative to the orbital frame, ``q_orbital`` (``B`` relative to
 ``O`` = radial, transverse, normal), is written the same way with ``REF_FRAME_A = RTN``.
 
-Times: ``time`` (seconds since the Dataset's ``epoch``) becomes absolute epochs
-``epoch + time`` (SI seconds of TT/TAI, leap seconds counted by astropy) written in ``TIME_SYSTEM``
+Times: ``elapsed`` (seconds since the Dataset's ``epoch``, :mod:`orbatt.dataset.build`) becomes
+absolute epochs ``epoch + elapsed`` (SI seconds of TT/TAI, leap seconds counted by astropy) written in ``TIME_SYSTEM``
 (UTC by default; TAI, TT, TDB, TCB, TCG also accepted) with nanosecond digits. Quaternion
 components are written with the shortest decimal that gives back the same float64, so a
 read gives the same bits.
@@ -68,6 +68,7 @@ from .. import quaternion as qt
 from ..epoch import parse_epoch
 from ..errors import InputError
 from .atomic import replacing
+from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["write_aem", "read_aem", "is_orbatt_aem", "Aem", "AemSegment", "aem_direction_cosine_matrix"]
 
@@ -183,12 +184,12 @@ def write_aem(ds, path=None, *, attitude="q", case=None, object_name="SATELLITE"
     elif case is not None:
         raise InputError("case: this dataset is not an ensemble; leave case out")
     epoch = ds.attrs.get("epoch")
-    if not epoch or ds["time"].attrs.get("units") != "s":
+    if not epoch or elapsed_unit(ds) != "s":
         raise InputError("AEM needs absolute times: this dataset has no epoch (or a dimensionless "
                          "time); give the scenario an epoch")
 
     q = np.asarray(ds[attitude].values, dtype=np.float64)
-    t = np.asarray(ds["time"].values, dtype=np.float64)
+    t = elapsed_values(ds)  # seconds since the epoch, exact (time's datetimes ignore leap seconds)
     if q.ndim != 2 or q.shape[1] != 4 or len(t) == 0:
         raise InputError(f"{attitude}: expected shape (N, 4) with N >= 1, got {q.shape}")
     ep = parse_epoch(str(epoch))

@@ -4,8 +4,40 @@ the names and constants of the layout.
 
 Every derived variable is computed here from the trajectory with :mod:`orbatt.canonical`,
 :mod:`orbatt.quaternion`, :mod:`orbatt.orbital` and the potential's ``evaluate``; nothing is
-integrated. Units: the spellings of :data:`orbatt.units.DIMENSIONAL_UNITS` (kg, km, s, rad) or
-:data:`orbatt.units.DIMENSIONLESS_UNITS`.
+integrated.
+
+Units
+-----
+Variables are computed in the kernels' units (:data:`orbatt.units.INTERNAL_UNITS`: kg, km,
+s, rad) and converted once, at the end (:func:`si_form`), to what is written
+(:data:`orbatt.units.DIMENSIONAL_UNITS`): the attitude family in SI - ``inertia``,
+``wheel_inertia`` in kg m^2; ``Q``, ``g``, ``G``, ``qQ``, ``wheel_momentum`` in kg m^2 s^-1;
+``energy``, ``kinetic_energy``, ``potential_energy`` in J - each the kernel value times
+``1e6``; torques in N m; orbit positions and velocities stay in km and km s^-1. A
+dimensionless problem keeps plain numbers (:data:`orbatt.units.DIMENSIONLESS_UNITS`).
+
+The time axis
+-------------
+Every dimensional result has one time representation, however it was obtained
+(``Scenario.run()``, :func:`orbatt.to_dataset`, :func:`orbatt.open_dataset`, plain
+:func:`xarray.open_dataset` of the file, a sweep's Dataset):
+
+* ``time`` (dimension coordinate): ``datetime64[ns]`` UTC datetimes, the epoch plus the
+  elapsed seconds as CF decoders compute it (leap seconds between the epoch and a sample are
+  not counted by numpy's datetimes; :meth:`ds.orbatt.times() <orbatt.dataset.accessor.OrbattAccessor.times>`
+  gives exact astropy Times). A run without an epoch is placed on the nominal epoch
+  :data:`NOMINAL_EPOCH` (2000-01-01T00:00:00Z, no calendar meaning: the global ``epoch``
+  attribute is absent and ``time``'s ``comment`` says so);
+* ``elapsed`` (coordinate along ``time``): float64 seconds since the epoch (or the start),
+  the integrator's output times bit for bit - use it for arithmetic and plots.
+
+In the file ``time`` is CF's ``seconds since <epoch>`` with ``calendar = "standard"`` and the
+same float64 values as ``elapsed`` (:func:`cf_time_attrs`); the in-memory Dataset is that
+file form decoded by xarray (:meth:`orbatt.dataset.content.Content.to_dataset`), so the
+three ways of getting a Dataset give equal ``time`` values and attributes, with no warning.
+
+A dimensionless problem (normalized units) has no calendar: ``time`` and ``elapsed`` are
+both float64 in the problem's time unit (``units = "1"``, the unit ``1/n`` of its rate scale).
 """
 from __future__ import annotations
 
@@ -28,9 +60,11 @@ from ..errors import InputError
 from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
 from ..potentials import energy_and_torques, evaluate_members
-from ..units import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
+from ..units import DIMENSIONLESS_UNITS, INTERNAL_UNITS, LEGACY_OUTPUT
 from ..version import __version__
 from .content import Content, Var
+from .timeaxis import (LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_unit,
+                       elapsed_values)
 
 if TYPE_CHECKING:  # annotations only: the Dataset is made by Content.to_dataset
     import xarray
@@ -41,7 +75,8 @@ CASE_NOTE = ("q/Q and g/G differ only in case: the notation of Arribas, Elipe & 
              "kept so that names match the paper's equations (CF 2.3 advises distinct names)")
 
 __all__ = [
-    "CASE_NOTE", "to_dataset", "dataset_content", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
+    "CASE_NOTE", "to_dataset", "si_form", "cf_time_attrs", "elapsed_attrs", "NOMINAL_EPOCH", "NOMINAL_COMMENT",
+    "LEAP_SECONDS", "UNIT_SYSTEM", "elapsed_values", "elapsed_unit", "dataset_content", "global_attrs", "cf_variable", "to_json", "utc_now", "orbatt_version",
     "QUATERNION_ORDER", "QUAT_INDEX", "QUAT_LABELS", "AXIS_INDEX", "AXIS_LABELS", "EULER_313_LABELS",
     "EULER_321_LABELS", "LABEL_COORDS", "CONVENTIONS", "REFERENCE", "FRAMES",
 ]
@@ -67,6 +102,8 @@ _ARANGE3 = np.arange(3)
 LABEL_COORDS = ("quat_label", "axis_label", "euler_313_label", "euler_321_label")
 
 CONVENTIONS = "CF-1.11"
+#: the ``unit_system`` attribute of a dimensional result
+UNIT_SYSTEM = "SI: kg, m, s, rad, J, N m (orbit positions and velocities in km, km s^-1)"
 REFERENCE = ("Arribas, M., Elipe, A., Palacios, M. (2006): Quaternions and the rotation of a "
              "rigid body. Celestial Mechanics and Dynamical Astronomy 96, 239-251")
 FRAMES = ("S: inertial (space) frame; B: body principal axes; O: orbital frame (o1 radial "
@@ -237,7 +274,7 @@ def global_attrs(*, method, settings, stats, potential, dimensionless, complete=
         The potential (its ``describe()`` is written as JSON text, ``potential``) or that
         description itself.
     dimensionless : bool
-        The unit system (``unit_system``: ``"kg km s rad"`` or ``"dimensionless (angles in
+        The unit system (``unit_system``: :data:`UNIT_SYSTEM` or ``"dimensionless (angles in
         rad)"``).
     complete : bool
         The integration reached its end (``integration_complete``, int8 1 or 0).
@@ -280,7 +317,7 @@ def global_attrs(*, method, settings, stats, potential, dimensionless, complete=
         "integration_stats": stats if isinstance(stats, str) else _JSON.encode(stats if stats is not None else {}),
         "integration_complete": np.int8(1 if complete else 0),
         "potential": to_json(pot_desc),
-        "unit_system": "dimensionless (angles in rad)" if dimensionless else "kg km s rad",
+        "unit_system": "dimensionless (angles in rad)" if dimensionless else UNIT_SYSTEM,
         "frames": FRAMES,
         "quaternion_order": QUATERNION_ORDER,
     }
@@ -333,7 +370,7 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     tr = trajectory
     body = tr.body
     dimless = bool(body.dimensionless)
-    U = DIMENSIONLESS_UNITS if dimless else DIMENSIONAL_UNITS
+    U = DIMENSIONLESS_UNITS if dimless else INTERNAL_UNITS  # computed in these; SI at the end (si_form)
     t = np.ascontiguousarray(tr.t, dtype=np.float64)
     q = np.asarray(tr.q, dtype=np.float64)
     Q = np.asarray(tr.Q, dtype=np.float64)
@@ -373,14 +410,9 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     e313 = _columns(phi, theta, psi)
 
     tdims = lead + ("time",)
-    # a CF time coordinate with or without an epoch (the file form adds "seconds since <epoch>",
-    # calendar and units_metadata where there is one: orbatt.dataset.netcdf.encode)
-    time_attrs = {"units": U["time"], "long_name": ("time since the epoch" if epoch_s else
-                                                      "dimensionless time" if dimless else
-                                                      "time since the start"),
-                  "standard_name": "time", "axis": "T"}
     coords = {
-        "time": Var(("time",), t, time_attrs),
+        "time": Var(("time",), t, cf_time_attrs(epoch_s, dimless)),
+        "elapsed": Var(("time",), t, elapsed_attrs(epoch_s, dimless)),
         "quat": _var(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                      quaternion_order=QUATERNION_ORDER),
         "quat_label": Var(("quat",), _QUAT_LABELS.copy(), {"long_name": "quaternion component name"}),
@@ -453,7 +485,24 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title)
+    if not dimless:  # the Dataset boundary: the attitude family from kernel units to SI
+        data, coords = si_form(data), si_form(coords)
     return Content(data, coords, attrs)
+
+
+def si_form(variables):
+    """``variables`` (name -> :class:`Var`) with the attitude family in SI: each variable whose
+    ``units`` is a kernel spelling of :data:`orbatt.units.LEGACY_OUTPUT` (``"kg km^2"``,
+    ``"kg km^2 s^-1"``, ``"kg km^2 s^-2"``, or orbatt 0.1's ``"kg km2 s-1"`` ...) is multiplied
+    by its factor (``1e6``) and relabelled (``"kg m^2"``, ``"kg m^2 s^-1"``, ``"J"``); the
+    others are kept as they are (a new dict)."""
+    out = {}
+    for name, var in variables.items():
+        conv = LEGACY_OUTPUT.get(var.attrs.get("units"))
+        if conv is not None:
+            var = Var(var.dims, var.values * conv[1], dict(var.attrs, units=conv[0]))
+        out[name] = var
+    return out
 
 
 #: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m

@@ -72,10 +72,16 @@ class Content:
         return name in self.data_vars or name in self.coords
 
     def to_dataset(self):
-        """The :class:`xarray.Dataset` of this content (arrays shared, not copied)."""
-        from .assembly import assemble
+        """The :class:`xarray.Dataset` of this content (arrays shared, not copied), with
+        ``time`` decoded as :func:`xarray.open_dataset` decodes it from the file (a CF
+        ``"seconds since <epoch>"`` time becomes ``datetime64[ns]``, its ``units`` and
+        ``calendar`` going into the variable's encoding: :mod:`orbatt.dataset.build`)."""
+        from .assembly import assemble, decode_time
 
-        return assemble(self.data_vars, self.coords, self.attrs)
+        coords = self.coords
+        if "time" in coords:
+            coords = dict(coords, time=decode_time(coords["time"]))
+        return assemble(self.data_vars, coords, self.attrs)
 
     def __repr__(self):
         return f"Content({len(self.data_vars)} variables, sizes {self.sizes})"

@@ -44,13 +44,15 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
     tdims : tuple
         ``("time",)`` or ``("case", "time")``.
     units : dict
-        The unit spellings of :data:`orbatt.units.DIMENSIONAL_UNITS`.
+        The unit spellings of the values: :data:`orbatt.units.INTERNAL_UNITS` (the kernels';
+        :func:`orbatt.dataset.build.si_form` turns them into SI at the Dataset boundary) or
+        :data:`orbatt.units.DIMENSIONLESS_UNITS`.
 
     Returns
     -------
     dict of Var
-        ``omega`` (rad/s) and ``kinetic_energy`` (body + rotors) of the gyrostat, and
-        ``wheel_momentum`` (kg km^2/s, axial, absolute), ``wheel_speed`` (rad/s, relative to
+        ``omega`` (rad/s) and ``kinetic_energy`` (body + rotors, kg km^2 s^-2) of the gyrostat,
+        and ``wheel_momentum`` (kg km^2/s, axial, absolute), ``wheel_speed`` (rad/s, relative to
         the body), ``wheel_torque`` (N m, motor) with a ``wheel`` dimension; with a control law
         ``torque_control`` (N m, body axes) and, for B-dot, ``dipole_control`` (A m^2).
     """

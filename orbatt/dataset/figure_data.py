@@ -19,6 +19,7 @@ from astropy import units as u
 from .. import quaternion as qt
 from ..units import parse_unit, unit_string
 from .plots import drift_series
+from .timeaxis import elapsed_values
 
 __all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
            "reference_rates", "thresholds", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms",
@@ -199,7 +200,7 @@ def rate_to_orbital_frame(ds):
         return None
     if not {"q_orbital", "true_anomaly", "omega"} <= set(ds.variables) or ds.sizes["time"] < 3:
         return None
-    t = np.asarray(ds["time"].values, dtype=np.float64)
+    t = elapsed_values(ds)  # seconds (or the dimensionless time): time holds datetimes
     nu = np.unwrap(np.asarray(ds["true_anomaly"].values, dtype=np.float64), axis=-1)
     nu_dot = np.gradient(nu, t, axis=-1)
     q_orb = np.asarray(ds["q_orbital"].values, dtype=np.float64)

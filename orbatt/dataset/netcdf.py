@@ -3,21 +3,27 @@ run goes; :class:`NetCDFWriter`), :func:`open_dataset`, and the file form
 (:func:`encode` / :func:`decode`, :func:`encoding`).
 
 float64 is stored losslessly (zlib + shuffle), chunked along an unlimited ``time`` dimension.
-In the file the time coordinate of a problem with an epoch has the CF encoding
-``units = "seconds since <epoch>"``, ``calendar = "standard"``,
-``units_metadata = "leap_seconds: utc"`` (plain :func:`xarray.open_dataset` decodes it to
-datetimes); :func:`open_dataset` gives back the in-memory form (``units = "s"``) bit for bit.
-A dimensional run without an epoch gets the nominal reference :data:`NOMINAL_REFERENCE`
-(``leap_seconds: none``); a dimensionless run keeps ``units = "1"``: its time unit is the
-problem's own (``1/n``), which CF's time units cannot express.
+The time axis (:mod:`orbatt.dataset.build`): in the file ``time`` holds the elapsed seconds
+as float64 with the CF encoding ``units = "seconds since <epoch>"``, ``calendar =
+"standard"`` (the nominal epoch ``2000-01-01T00:00:00Z`` for a run without one), and
+``elapsed`` the same values in ``s``. :func:`open_dataset` and plain :func:`xarray.open_dataset`
+both decode ``time`` to ``datetime64[ns]`` (the form ``Scenario.run()`` gives) and keep
+``elapsed`` as float seconds, bit for bit, without warnings. A dimensionless run keeps
+``units = "1"`` on both: its time unit is the problem's own (``1/n``), which CF's time units
+cannot express.
+
+Files of earlier orbatt versions (attitude quantities in kg km^2 ..., ``time`` alone, with the
+reference year 0001 without an epoch) open in the current form with :func:`open_dataset`
+(:func:`decode`): values in a kernel unit are multiplied by ``1e6`` and relabelled in SI,
+``elapsed`` is added and ``time`` decoded on the current epoch or nominal epoch.
 
 Leap seconds: orbatt integrates in SI seconds from the epoch and turns times into dates with
 astropy, which counts leap seconds (``epoch + t`` is ``t`` SI seconds later, also across a leap
 second). That is CF 1.11's ``units_metadata = "leap_seconds: utc"`` (elapsed time with leap
-seconds, on the ``standard`` calendar). Tools that ignore leap seconds (cftime, hence xarray's
-decoding) are off by one second per leap second inserted between the epoch and a sample; the
-``time`` values themselves (elapsed seconds) are exact. Two engines write the same netCDF-4/HDF5 layout:
-netCDF4 and h5netcdf (:func:`check_engine`).
+seconds, on the ``standard`` calendar). Tools that ignore leap seconds (cftime, numpy, hence
+xarray's decoding and the ``time`` coordinate) are off by one second per leap second inserted
+between the epoch and a sample; ``elapsed`` is exact. Two engines write the same
+netCDF-4/HDF5 layout: netCDF4 and h5netcdf (:func:`check_engine`).
 """
 from __future__ import annotations
 
@@ -33,25 +39,25 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import InputError
+from ..units import LEGACY_OUTPUT
 from .atomic import TEMP_PREFIX, replacing
-from .build import LABEL_COORDS, orbatt_version, utc_now
+from .build import LABEL_COORDS, UNIT_SYSTEM, orbatt_version, utc_now
 from .content import Content, Var
 from .netcdf_direct import writable, write_content
+from .timeaxis import LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_values
 
 if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is read or made
     import xarray as xr
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
-           "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS"]
+           "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS", "NOMINAL_EPOCH", "NOMINAL_COMMENT",
+           "LEGACY_NOMINAL_REFERENCE"]
 
 DEFAULT_CHUNK_TIME = 16384
-#: CF 1.11 §4.4 leap-second statement of the file's time coordinate (module docstring)
-LEAP_SECONDS = "leap_seconds: utc"
-#: the CF reference date of a dimensional run without an epoch: CF requires one for a time
-#: coordinate; year 1 says plainly that it is no calendar date (``comment`` says so too)
-NOMINAL_REFERENCE = "0001-01-01 00:00:00"
-NOMINAL_COMMENT = ("no epoch: time counts seconds from the start of the run; the reference date "
-                   f"{NOMINAL_REFERENCE} is nominal (CF requires one)")
+#: the reference date orbatt <= 0.3.0.dev0 wrote for a dimensional run without an epoch (read,
+#: never written: it decoded to cftime objects with two warnings; now :data:`NOMINAL_EPOCH`)
+LEGACY_NOMINAL_REFERENCE = "0001-01-01 00:00:00"
+_SECONDS = ("seconds", "second", "secs", "sec", "s")
 
 
 def _default_engine():
@@ -83,52 +89,98 @@ def check_engine(engine):
 
 
 def encode(ds: xr.Dataset) -> xr.Dataset:
-    """The file form: CF time reference (the epoch, or :data:`NOMINAL_REFERENCE` for a
-    dimensional run without one), no stale encodings."""
+    """The file form: ``time`` as float64 ``seconds since <epoch>`` (the ``elapsed`` values,
+    :func:`file_time`), no stale encodings."""
     out = ds.drop_encoding()  # new variables (attribute dicts copied, data shared)
     if "time" in ds.coords:
-        _cf_time(out["time"].attrs, ds.attrs)  # out's own copy: ds keeps its attributes
+        from .assembly import assemble
+
+        coords = {k: (file_time(ds) if k == "time" else out[k].variable) for k in out.coords}
+        out = assemble({k: out[k].variable for k in out.data_vars}, coords, out.attrs)  # the order kept
     return out
 
 
-def _cf_time(attrs, global_attrs):
-    """Turn the attributes ``attrs`` of a time coordinate in seconds (``units = "s"``) into
-    CF's ``seconds since <epoch>`` (in place); a dimensionless time (``"1"``) has no CF time
-    reference and stays."""
-    if attrs.get("units") != "s":
-        return
-    epoch = global_attrs.get("epoch")
-    if epoch:
-        attrs.update(units=f"seconds since {epoch}", calendar="standard", units_metadata=LEAP_SECONDS)
-    else:
-        attrs.update(units=f"seconds since {NOMINAL_REFERENCE}", calendar="proleptic_gregorian",
-                     units_metadata="leap_seconds: none", comment=NOMINAL_COMMENT)
+def file_time(ds) -> Var:
+    """The ``time`` coordinate of the Dataset ``ds`` in the file's CF form.
+
+    ``datetime64`` times are written as the ``elapsed`` seconds (exact; computed from the
+    datetimes and the epoch only where ``elapsed`` is missing) with ``units = "seconds since
+    <epoch>"`` (the global ``epoch``, or :data:`NOMINAL_EPOCH`) and ``calendar``; float times
+    in ``s`` (orbatt's in-memory form before issue 26) are given the same attributes; a
+    dimensionless time (``"1"``) is kept as it is.
+    """
+    time = ds["time"].variable
+    attrs = dict(time.attrs)
+    epoch = ds.attrs.get("epoch") or None
+    if time.dtype.kind == "M":
+        ref = epoch or NOMINAL_EPOCH
+        values = elapsed_values(ds)
+        for k in ("units", "calendar"):
+            attrs.pop(k, None)
+        attrs.update(units=f"seconds since {ref}", calendar="standard")
+        return Var(time.dims, values, attrs)
+    if attrs.get("units") == "s":
+        return Var(time.dims, np.asarray(time.values, dtype=np.float64), cf_time_attrs(epoch, False))
+    return Var(time.dims, np.asarray(time.values), attrs)
 
 
 def decode(ds: xr.Dataset) -> xr.Dataset:
-    """Inverse of :func:`encode` on a dataset opened with ``decode_times=False``."""
+    """The in-memory form of a Dataset opened with ``decode_times=False`` (inverse of
+    :func:`encode`): ``time`` decoded to ``datetime64[ns]`` as xarray decodes it, label
+    coordinates as strings. A file of an earlier orbatt is turned into the current form:
+    values in kernel units (``"kg km^2 s^-1"`` ...) multiplied by ``1e6`` into SI,
+    ``elapsed`` added, the year-0001 reference replaced by :data:`NOMINAL_EPOCH`."""
     import xarray as xr
 
+    from .assembly import decode_time
+
+    scaled = {}
+    for name, var in ds.variables.items():
+        conv = LEGACY_OUTPUT.get(var.attrs.get("units"))
+        if conv is not None:
+            scaled[name] = xr.Variable(var.dims, np.asarray(var.values) * conv[1], dict(var.attrs, units=conv[0]))
+    if scaled:
+        ds = ds.assign({k: v for k, v in scaled.items() if k in ds.data_vars})
+        ds = ds.assign_coords({k: v for k, v in scaled.items() if k in ds.coords})
+        ds.attrs["unit_system"] = UNIT_SYSTEM
     if "time" in ds.coords:
-        units = str(ds["time"].attrs.get("units", ""))
-        if " since " in units:
-            head, ref = (s.strip() for s in units.split(" since ", 1))
-            if head.lower() not in ("seconds", "second", "secs", "sec", "s"):
-                raise InputError(f"time: units {units!r}; orbatt files use 'seconds since <epoch>'")
-            attrs = dict(ds["time"].attrs)
-            attrs["units"] = "s"
-            for name in ("calendar", "units_metadata"):
-                attrs.pop(name, None)
-            if attrs.get("comment") == NOMINAL_COMMENT:
-                del attrs["comment"]
-            ds = ds.assign_coords(time=xr.Variable(("time",), ds["time"].values, attrs,
-                                                   encoding=ds["time"].encoding))
-            if "epoch" not in ds.attrs and ref != NOMINAL_REFERENCE:
-                ds.attrs["epoch"] = ref
+        ds = _decode_time_axis(ds, xr, decode_time)
     for name in LABEL_COORDS:
         if name in ds.coords and ds[name].dtype.kind in "OS":
             vals = np.array([v.decode() if isinstance(v, bytes) else str(v) for v in ds[name].values])
             ds = ds.assign_coords({name: xr.Variable(ds[name].dims, vals, ds[name].attrs)})
+    return ds
+
+
+def _decode_time_axis(ds, xr, decode_time):
+    """``ds`` with ``time`` decoded (and ``elapsed`` added to a file that lacks it)."""
+    time = ds["time"].variable
+    units = str(time.attrs.get("units", ""))
+    legacy = "elapsed" not in ds.variables
+    values = np.asarray(time.values)
+    if " since " in units:
+        head, ref = (x.strip() for x in units.split(" since ", 1))
+        if head.lower() not in _SECONDS:
+            raise InputError(f"time: units {units!r}; orbatt files use 'seconds since <epoch>'")
+        real = ref not in (LEGACY_NOMINAL_REFERENCE, NOMINAL_EPOCH)
+        if real and "epoch" not in ds.attrs:
+            ds.attrs["epoch"] = ref
+        epoch = ds.attrs.get("epoch") if real else None
+        attrs = cf_time_attrs(epoch, False) if legacy else dict(time.attrs)
+        if not legacy or real:
+            attrs.update(units=units)  # the file's own reference, as xarray reads it
+        elapsed = (values, elapsed_attrs(epoch, False))
+        time = decode_time(xr.Variable(("time",), values.astype(np.float64), attrs))
+    elif units == "1":
+        if not legacy:
+            return ds
+        time = xr.Variable(("time",), values, cf_time_attrs(None, True))
+        elapsed = (values, elapsed_attrs(None, True))
+    else:
+        return ds
+    ds = ds.assign_coords(time=time)
+    if legacy:
+        ds = ds.assign_coords(elapsed=("time",) + elapsed)
     return ds
 
 
@@ -238,17 +290,16 @@ def _file_content(ds):
         plain = {}
         for name, var in ds.variables.items():
             values = var.data
+            if name == "time":
+                continue  # file_time below
             if type(values) is not np.ndarray:
                 return None
             plain[name] = Var(var.dims, values, var.attrs)
+        if "time" in ds.variables:
+            plain["time"] = file_time(ds)
         data_vars = {k: plain[k] for k in ds.data_vars}
         coords = {k: plain[k] for k in ds.coords}
         attrs = ds.attrs
-    if "time" in coords:
-        time = coords["time"]
-        time_attrs = dict(time.attrs)
-        _cf_time(time_attrs, attrs)
-        coords = dict(coords, time=Var(time.dims, time.values, time_attrs))
     return Content(data_vars, coords, attrs)
 
 
@@ -452,9 +503,10 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        ``time`` as float seconds since the epoch (``units = "s"``; the CF ``"seconds since"``
-        of the file is undone), label coordinates as strings, every value bit for bit as
-        written.
+        The form ``Scenario.run()`` gives (:mod:`orbatt.dataset.build`): ``time`` as
+        ``datetime64[ns]`` UTC (decoded as plain :func:`xarray.open_dataset` decodes it),
+        ``elapsed`` in float seconds, label coordinates as strings, every value bit for bit
+        as written. A file of an earlier orbatt comes in the same form (:func:`decode`).
     """
     import xarray as xr
 

@@ -17,6 +17,7 @@ import numpy as np
 from .. import quaternion as qt
 from ..units import parse_unit, unit_string
 from .build import EULER_313_LABELS, EULER_321_LABELS
+from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["plot_state", "plot_attitude", "plot_drift", "time_axis", "drift_series"]
 
@@ -55,12 +56,12 @@ def time_axis(ds, time="auto"):
     ds : xarray.Dataset
     time : {"auto", "utc", "orbits", "time"}
         ``"utc"``: dates (numpy datetime64, UTC) from the epoch; ``"orbits"``: time over the
-        orbital period; ``"time"``: the ``time`` coordinate in its unit. ``"auto"``: UTC
+        orbital period; ``"time"``: the ``elapsed`` coordinate in its unit (s, or dimensionless). ``"auto"``: UTC
         with an epoch, else orbits with an orbit, else time.
     """
     if time not in TIME_AXES:
         raise ValueError(f"time: {time!r} is not one of {TIME_AXES}")
-    t = np.asarray(ds["time"].values, dtype=np.float64)
+    t = elapsed_values(ds)
     epoch = ds.orbatt.epoch
     period = orbit_period(ds)
     if time == "auto":
@@ -73,8 +74,8 @@ def time_axis(ds, time="auto"):
         if not period:
             raise ValueError("time: 'orbits' needs an orbit; this Dataset has none")
         return t / period, "time [orbits]"
-    units = ds["time"].attrs.get("units", "")
-    return t, ("time (dimensionless)" if units == "1" else f"time [{unit_string(parse_unit(units))}]")
+    units = elapsed_unit(ds)
+    return t, ("time (dimensionless)" if units == "1" else f"elapsed time [{unit_string(parse_unit(units))}]")
 
 
 def _unit_label(quantity, units):

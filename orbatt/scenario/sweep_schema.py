@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import units as U
-from ..dataset import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
+from ..dataset import DIMENSIONLESS_UNITS
+from ..units import INTERNAL_UNITS
 from .paths import leaf_quantity, resolve, split_path
 from .study_schema import parse_study_keys
 from .fields import parse_int, parse_quantity
@@ -130,9 +131,11 @@ def parameter_unit(kind):
 
 
 def parameter_units(dimensionless):
-    """CF unit string of every parameter in :data:`PARAMETERS` (internal units; a
-    dimensionless scenario's inertia and rates are plain numbers, ``"1"``)."""
-    table = DIMENSIONLESS_UNITS if dimensionless else DIMENSIONAL_UNITS
+    """CF unit string of every parameter in :data:`PARAMETERS` (internal units, those the
+    values are sampled in: :data:`orbatt.units.INTERNAL_UNITS`; a dimensionless scenario's
+    inertia and rates are plain numbers, ``"1"``). The sweep's Dataset writes the inertia
+    parameters in kg m^2 (:func:`orbatt.sweep.chunk.chunk_dataset`)."""
+    table = DIMENSIONLESS_UNITS if dimensionless else INTERNAL_UNITS
     return {name: table[p.kind] for name, p in PARAMETERS.items()}
 
 

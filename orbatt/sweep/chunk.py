@@ -25,6 +25,7 @@ from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
 from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
+from ..units import LEGACY_OUTPUT, to_output
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
                                      sweep_units)
 from .sampling import nominal_rates
@@ -393,7 +394,8 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
     """
     import xarray as xr
 
-    UN = DIMENSIONLESS_UNITS if sc.spec.dimensionless else DIMENSIONAL_UNITS
+    dimless = sc.spec.dimensionless
+    UN = DIMENSIONLESS_UNITS if dimless else DIMENSIONAL_UNITS  # written in SI (orbatt.units.to_output)
     outs = set(spec.outputs)
     perr = res["pointing_error"]
     coords = {"case": cf_variable(("case",), case, "1", "sweep case (index into the sampled parameters)"),
@@ -404,12 +406,17 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
                               quaternion_order="w x y z")
         coords["quat_label"] = xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"})
     for name in spec.parameters:
+        # sampled in internal units (or a path's own unit); a kernel unit of the attitude family
+        # (the inertia parameters' kg km^2) is written in SI, as every output
+        vals, unit = values[name], units[name]
+        conv = LEGACY_OUTPUT.get(unit)
+        if conv is not None:
+            vals, unit = np.multiply(vals, conv[1]), conv[0]
         if name in spec.paths:  # by its path: the coordinate named for it, the path as written
-            coords[coordinate_name(name)] = cf_variable(("case",), values[name], units[name],
+            coords[coordinate_name(name)] = cf_variable(("case",), vals, unit,
                                                         f"sampled parameter: scenario key {name}", scenario_key=name)
         else:
-            coords[name] = cf_variable(("case",), values[name], units[name],
-                                       f"sampled parameter: {PARAMETERS[name].long_name}")
+            coords[name] = cf_variable(("case",), vals, unit, f"sampled parameter: {PARAMETERS[name].long_name}")
     if axis is not None:
         coords["attitude_axis"] = cf_variable(("case", "axis"), axis, "1",
                                        "axis of the initial attitude perturbation (unit vector)", frame="B")
@@ -417,12 +424,15 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
     qattrs = {"quaternion_order": "w x y z", "frames": "B relative to S"}
     if "final_state" in outs:
         data["q_initial"] = cf_variable(("case", "quat"), res["q_initial"], "1", "initial attitude quaternion", **qattrs)
-        data["Q_initial"] = cf_variable(("case", "quat"), res["Q_initial"], UN["momentum"], "initial conjugate momentum")
+        data["Q_initial"] = cf_variable(("case", "quat"), to_output(res["Q_initial"], "momentum", dimless),
+                                        UN["momentum"], "initial conjugate momentum")
         data["q_final"] = cf_variable(("case", "quat"), res["q_final"], "1", "final attitude quaternion (at the last output time)",
                                **qattrs)
-        data["Q_final"] = cf_variable(("case", "quat"), res["Q_final"], UN["momentum"], "final conjugate momentum")
+        data["Q_final"] = cf_variable(("case", "quat"), to_output(res["Q_final"], "momentum", dimless),
+                                      UN["momentum"], "final conjugate momentum")
     if "trajectory" not in outs:
-        data["inertia"] = cf_variable(("case", "axis"), res["inertia"], UN["inertia"], "principal moments of inertia (I1, I2, I3)",
+        data["inertia"] = cf_variable(("case", "axis"), to_output(res["inertia"], "inertia", dimless), UN["inertia"],
+                                      "principal moments of inertia (I1, I2, I3)",
                                frame="B")
     ref = (f"body axis {spec.pointing_axis.tolist()} vs the same axis of the {spec.pointing_reference} frame"
            if spec.pointing_axis is not None else f"rotation angle of the attitude relative to the "

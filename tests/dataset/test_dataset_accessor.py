@@ -36,10 +36,10 @@ def test_dimensional_units_and_omega_in_deg_per_s():
     t = np.linspace(0.0, 100.0, 11)
     ds = D.to_dataset(_propagate(body, Q0_PAPER, _tangent(Q0_PAPER, P0_PAPER), orbatt.TorqueFree(), t))
     _every_units_parses(ds)
-    expect = {"time": "s", "q": "1", "Q": "kg km^2 s^-1", "omega": "rad s^-1", "g": "kg km^2 s^-1",
-              "G": "kg km^2 s^-1", "energy": "kg km^2 s^-2", "kinetic_energy": "kg km^2 s^-2",
-              "potential_energy": "kg km^2 s^-2", "q_norm_error": "1", "qQ": "kg km^2 s^-1",
-              "euler_313": "rad", "inertia": "kg km^2"}
+    expect = {"elapsed": "s", "q": "1", "Q": "kg m^2 s^-1", "omega": "rad s^-1", "g": "kg m^2 s^-1",
+              "G": "kg m^2 s^-1", "energy": "J", "kinetic_energy": "J",
+              "potential_energy": "J", "q_norm_error": "1", "qQ": "kg m^2 s^-1",
+              "euler_313": "rad", "inertia": "kg m^2"}
     for name, units in expect.items():
         assert ds[name].attrs["units"] == units, name
     assert not ds.orbatt.dimensionless
@@ -50,8 +50,9 @@ def test_dimensional_units_and_omega_in_deg_per_s():
     assert np.allclose(ds.orbatt.quantity("omega").to_value(u.deg / u.s), np.degrees(w), rtol=1e-15, atol=0)
     assert ds["omega"].attrs["units"] == "rad s^-1"  # the dataset is unchanged
     qd = ds.orbatt.quantity("energy")
-    assert qd.unit == u.kg * u.km**2 / u.s**2
-    assert np.allclose(qd.to_value(u.J), ds["energy"].values * 1e6, rtol=1e-15)
+    assert qd.unit == u.J
+    assert np.allclose(qd.to_value(u.kg * u.km**2 / u.s**2), ds["energy"].values * 1e-6, rtol=1e-15)
+    assert ds.orbatt.unit("time") == u.s and np.array_equal(ds.orbatt.quantity("time").value, t)
     conv = ds.orbatt.convert(omega=u.deg / u.s, euler_313="degree")
     assert conv["euler_313"].attrs["units"] == "degree"
     assert np.allclose(conv["euler_313"].values, np.degrees(ds["euler_313"].values), rtol=1e-15)

@@ -98,7 +98,7 @@ def test_round_trip(qtype, time_system, tmp_path):
     assert seg.q.tobytes() == ds["q"].values.tobytes()  # bit for bit
     q_body, ref = seg.body_attitude
     assert ref == "EME2000" and np.array_equal(q_body, ds["q"].values)
-    assert np.allclose(seg.seconds_since(ds.attrs["epoch"]), ds["time"].values, rtol=0, atol=2e-9)
+    assert np.allclose(seg.seconds_since(ds.attrs["epoch"]), ds["elapsed"].values, rtol=0, atol=2e-9)
     assert seg.seconds_since(ds.orbatt.epoch)[0] == pytest.approx(0.0, abs=1e-9)
     # the text itself is also accepted
     assert np.array_equal(aem.read_aem(text).segments[0].q, seg.q)

@@ -113,14 +113,16 @@ def test_orbit_variables(orbit_ds, orbit_traj):
     # potential energy from the kernel agrees with MacCullagh's formula on the stored r, p, q
     xb = qt.rotate_inv(q, qt.rotate(p, [1.0, 0, 0]))
     I = orbit_traj.body.inertia_value
-    U = 1.5 * orbit.gm / ds["r"].values ** 3 * np.sum(xb * I * xb, axis=1)
-    assert np.allclose(ds["potential_energy"].values, U, rtol=1e-12, atol=0)
+    U = 1.5 * orbit.gm / ds["r"].values ** 3 * np.sum(xb * I * xb, axis=1)  # kg km^2 s^-2
+    assert np.allclose(ds["potential_energy"].values, U * 1e6, rtol=1e-12, atol=0)  # in J
     # the epoch comes from the orbit, in UTC with Z
     assert ds.attrs["epoch"] == "2024-03-20T03:06:00.000000000Z"
     assert abs((ds.orbatt.epoch - EPOCH).to_value(u.s)) < 1e-9
     times = ds.orbatt.times()
     assert abs((times[-1] - EPOCH).to_value(u.s) - t[-1]) < 1e-6
-    assert ds["time"].attrs["units"] == "s" and ds["time"].attrs["standard_name"] == "time"
+    assert ds["elapsed"].attrs["units"] == "s" and ds["time"].attrs["standard_name"] == "time"
+    assert ds["time"].encoding["units"] == "seconds since 2024-03-20T03:06:00.000000000Z"
+    assert ds["time"].values[0] == np.datetime64("2024-03-20T03:06:00", "ns")
     assert json.loads(ds.attrs["orbit"])["provider"] == "circular-test"
 
 
@@ -155,8 +157,8 @@ def test_with_the_kepler_provider():
     assert ds["r"].values.min() == pytest.approx(5600.0) and ds["r"].values.max() == pytest.approx(8400.0)
     p = ds["p"].values
     xb = qt.rotate_inv(tr.q, qt.rotate(p, [1.0, 0, 0]))
-    U = 1.5 * orbit.gm / ds["r"].values ** 3 * np.sum(xb * body.inertia_value * xb, axis=1)
-    assert np.allclose(ds["potential_energy"].values, U, rtol=1e-12, atol=0)
+    U = 1.5 * orbit.gm / ds["r"].values ** 3 * np.sum(xb * body.inertia_value * xb, axis=1)  # kg km^2 s^-2
+    assert np.allclose(ds["potential_energy"].values, U * 1e6, rtol=1e-12, atol=0)  # in J
     assert ds.attrs["epoch"] == "2024-03-20T03:06:00.000000000Z"
     assert json.loads(ds.attrs["orbit"])["a_km"] == 7000.0
 

@@ -40,7 +40,10 @@ def test_file_opens_with_plain_xarray_and_netcdf4(orbit_ds, free_ds, tmp_path):
         assert np.issubdtype(plain["time"].dtype, np.datetime64)
         assert str(t0).startswith("2024-03-20T03:06:00")
         step = (plain["time"].values[1] - t0) / np.timedelta64(1, "ns") * 1e-9
-        assert abs(step - orbit_ds["time"].values[1]) < 1e-6
+        assert abs(step - orbit_ds["elapsed"].values[1]) < 1e-6
+        # the same time axis as the Dataset itself: datetimes, elapsed seconds
+        assert np.array_equal(plain["time"].values, orbit_ds["time"].values)
+        assert np.array_equal(plain["elapsed"].values, orbit_ds["elapsed"].values)
         assert plain["omega"].attrs["units"] == "rad s^-1"
         assert np.array_equal(plain["q"].values, orbit_ds["q"].values)
     # the raw file: CF attributes that matter

@@ -74,7 +74,7 @@ def test_time_axis_in_orbits_dates_or_time(free, circular, tle):
     assert label.startswith("UTC (from 2019-12-09T17:38:29") and np.issubdtype(x.dtype, np.datetime64)
     assert (x[-1] - x[0]) == np.timedelta64(3000, "s")
     assert time_axis(free)[1] == "time (dimensionless)"
-    assert time_axis(circular, "time")[1] == "time [s]"
+    assert time_axis(circular, "time")[1] == "elapsed time [s]"
     assert time_axis(tle, "orbits")[1] == "time [orbits]"
     with pytest.raises(ValueError, match="needs an epoch"):
         time_axis(circular, "utc")

@@ -49,13 +49,14 @@ def test_gravity_gradient_members_with_their_own_inertia():
     for e in range(3):
         _same_member_values(ens, D.to_dataset(alone[e]), e, ENERGY_AND_TORQUES + ("kinetic_energy",))
         U, tau = energy_and_torques(sc.potential, bodies[e], tr.t, tr.q[e], True)
-        assert np.array_equal(ens["potential_energy"].values[e], U)
+        assert np.array_equal(ens["potential_energy"].values[e], U * 1e6)  # kernel units -> J
     # the potential energy is the gravity gradient's: (3 GM / 2 r^3) x_B . I x_B
     r = ens["r"].values
     xb = qt.rotate_inv(tr.q, qt.rotate(ens["p"].values, [1.0, 0.0, 0.0]))
     I = np.asarray(inertias)[:, None, :]
-    U = 1.5 * sc.orbit.gm / r**3 * np.sum(xb * I * xb, axis=-1)
-    assert np.allclose(ens["potential_energy"].values, U, rtol=1e-12, atol=0)
+    U = 1.5 * sc.orbit.gm / r**3 * np.sum(xb * I * xb, axis=-1)  # kg km^2 s^-2
+    assert ens["potential_energy"].attrs["units"] == "J"
+    assert np.allclose(ens["potential_energy"].values, U * 1e6, rtol=1e-12, atol=0)
 
 
 def test_environment_torques_members_term_by_term():

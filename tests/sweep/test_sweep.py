@@ -288,7 +288,7 @@ def test_1000_cases_on_a_local_cluster_equal_the_serial_run(cluster, big, tmp_pa
         run = json.loads(ds.attrs["sweep_run"])
         assert run["chunks"] == 12 and run["chunks_computed"] == 12 and run["workers"] == 2
         assert int(ds.attrs["sweep_seed"]) == 20260320 and int(ds.attrs["sweep_cases"]) == 1000
-        assert ds["tumbling"].dtype == np.int8 and ds["inertia1"].attrs["units"] == "kg km^2"
+        assert ds["tumbling"].dtype == np.int8 and ds["inertia1"].attrs["units"] == "kg m^2"
         assert json.loads(ds.attrs["integration_stats"])["steps"] > 1000
     assert sorted(os.listdir(tmp_path)) == ["big.nc"]
 

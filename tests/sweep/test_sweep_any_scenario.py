@@ -63,7 +63,7 @@ def test_every_case_is_the_single_run_of_its_scenario(name):
     finals = []
     for k in range(4):
         w1 = OMEGA1[0] if ds["omega1"].values[k] == sw.values["omega1"].min() else OMEGA1[1]  # grid values
-        inertia2 = i2[0] if ds["inertia2"].values[k] == sw.values["inertia2"].min() else i2[1]
+        inertia2 = i2[0] if ds["inertia2"].values[k] == ds["inertia2"].values.min() else i2[1]  # (kg m^2 there)
         sc = Scenario(parse(_case_text(name, text, w1, inertia2), f"{name}-case.toml"))
         ref = sc.run()
         assert np.array_equal(ds["q_final"].values[k], ref["q"].values[-1]), (name, k)
