@@ -87,7 +87,18 @@ warnings.simplefilter("ignore")
 # --------------------------------------------------------------------------------------------
 
 def bdot_dipole_text(samples):
-    """The B-dot Monte Carlo scenario with the centred tilted dipole and ``samples`` cases."""
+    """The B-dot Monte Carlo scenario with the centred tilted dipole.
+
+    Parameters
+    ----------
+    samples : int
+        The number of cases (``[sweep] samples``).
+
+    Returns
+    -------
+    str
+        ``scenarios/cubesat-detumble-montecarlo.toml`` with ``magnetic_field = "dipole"``.
+    """
     text = BDOT_SCENARIO.read_text()
     text = text.replace('magnetic_field = "igrf"', 'magnetic_field = "dipole"')
     text = re.sub(r"^samples = \d+$", f"samples = {samples}", text, flags=re.M)
@@ -96,7 +107,20 @@ def bdot_dipole_text(samples):
 
 
 def final_rate(ds, k):
-    """Body rate (rad/s, body axes) of case ``k`` at the end: ``I omega = Im(q~ Q) / 2``."""
+    """Body rate of case ``k`` at the end: ``I omega = Im(q~ Q) / 2``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with ``final_state`` (``q_final``, ``Q_final``) and ``inertia``.
+    k : int
+        The case.
+
+    Returns
+    -------
+    ndarray (3,)
+        rad/s, body axes.
+    """
     q, Q, inertia = ds["q_final"].values[k], ds["Q_final"].values[k], ds["inertia"].values[k]
     w0, wv = q[0], -q[1:]
     vec = w0 * Q[1:] + Q[0] * wv + np.cross(wv, Q[1:])
@@ -104,7 +128,20 @@ def final_rate(ds, k):
 
 
 def orbatt_inprocess(path):
-    """``(seconds, Dataset)`` of ``load_sweep(path).compute()``."""
+    """Run a sweep in this process.
+
+    Parameters
+    ----------
+    path : Path
+        A scenario file with ``[sweep]``.
+
+    Returns
+    -------
+    seconds : float
+        Wall time of ``load_sweep(path).compute()``.
+    ds : xarray.Dataset
+        Its result.
+    """
     from orbatt.sweep import load_sweep
 
     t0 = time.perf_counter()
@@ -113,7 +150,22 @@ def orbatt_inprocess(path):
 
 
 def orbatt_cli(path, workers, folder):
-    """Wall time of ``orbatt sweep path --workers N`` in a fresh process."""
+    """Run ``orbatt sweep path --workers N -o folder/cli.nc`` in a fresh process.
+
+    Parameters
+    ----------
+    path : Path
+        A scenario file with ``[sweep]``.
+    workers : int
+        The local Dask cluster's worker processes.
+    folder : Path
+        Where the result file goes (replaced).
+
+    Returns
+    -------
+    float
+        Wall time (s) of the whole process.
+    """
     exe = shutil.which("orbatt", path=str(Path(sys.executable).parent)) or shutil.which("orbatt")
     out = Path(folder) / "cli.nc"
     if out.exists():
@@ -128,7 +180,20 @@ def orbatt_cli(path, workers, folder):
 
 
 def basilisk_setup(epoch):
-    """Dipole coefficients (T) and the GCRS -> ITRS rotation at ``epoch`` (orbatt's)."""
+    """orbatt's dipole and Earth orientation at ``epoch``, for Basilisk.
+
+    Parameters
+    ----------
+    epoch : astropy.time.Time
+        The orbit's epoch.
+
+    Returns
+    -------
+    coefficients : ndarray (3,)
+        ``(g10, g11, h11)`` in tesla (:class:`orbatt.environment.magnetic.DipoleField`).
+    c0 : ndarray (3, 3)
+        The GCRS -> ITRS rotation at ``epoch`` (``x_ITRS = c0 x_GCRS``).
+    """
     from orbatt.environment.frames import rotation_gcrs_to_itrs
     from orbatt.environment.magnetic import DipoleField
 
@@ -273,8 +338,20 @@ def basilisk_case(case, dt=BSK_DT):
 
 
 def detumble_time(t, rate, limit):
-    """Earliest time after which ``rate < limit`` to the end (linear between samples); NaN if
-    never, 0 if always."""
+    """Earliest time after which ``rate < limit`` to the end, linear between samples.
+
+    Parameters
+    ----------
+    t, rate : ndarray (N,)
+        Sample times (s) and |omega| (rad/s).
+    limit : float
+        The threshold (rad/s).
+
+    Returns
+    -------
+    float
+        s; NaN if the last sample is not below ``limit``, 0 if every sample is.
+    """
     above = np.nonzero(rate >= limit)[0]
     if len(above) == 0:
         return 0.0
@@ -285,7 +362,20 @@ def detumble_time(t, rate, limit):
 
 
 def bdot_cases(sweep, ks):
-    """Basilisk's description of the sweep's cases ``ks`` (SI units)."""
+    """The sweep's cases for :func:`basilisk_case`.
+
+    Parameters
+    ----------
+    sweep : orbatt.sweep.Sweep
+        The B-dot sweep (Kepler orbit, ``omega1..3`` and ``inertia1..3`` swept).
+    ks : iterable of int
+        The cases.
+
+    Returns
+    -------
+    list of dict
+        One :func:`basilisk_case` description per case, SI units.
+    """
     sc = sweep.scenario
     o = sc.orbit
     coefficients, c0 = basilisk_setup(o.epoch)
@@ -303,19 +393,45 @@ def bdot_cases(sweep, ks):
 
 
 def orbit_elements(orbit):
-    """``(a m, e, i, raan, argp, true anomaly)`` (rad) of the scenario's Kepler orbit at t = 0."""
+    """The Kepler orbit's elements at t = 0 for ``orbitalMotion.ClassicElements``.
+
+    Parameters
+    ----------
+    orbit : orbatt.orbits.KeplerOrbit
+
+    Returns
+    -------
+    tuple of float
+        ``(a, e, i, raan, argp, true anomaly)``: m and rad.
+    """
     el = orbit.elements
     return (el["a"] * 1e3, el["e"], el["i"], el["raan"], el["argp"], el["true_anomaly"])
 
 
 def _pool_worker(case):
+    """One case in a pool process (:func:`basilisk_case` at the default task step)."""
     return basilisk_case(case)
 
 
 def basilisk_pooled(cases, cores):
-    """Wall time of the cases run as Basilisk's Controller runs them: a fresh
+    """Run cases as Basilisk's Monte Carlo ``Controller`` runs them: a fresh
     ``multiprocessing.Pool(cores)`` (fork) per batch of ``cores`` cases, one simulation per
-    process. Returns ``(seconds, results)``."""
+    process.
+
+    Parameters
+    ----------
+    cases : list of dict
+        :func:`basilisk_case` descriptions.
+    cores : int
+        Processes per pool.
+
+    Returns
+    -------
+    seconds : float
+        Wall time of all the batches.
+    results : list of dict
+        :func:`basilisk_case`'s results, in order.
+    """
     ctx = mp.get_context("fork")
     results = []
     t0 = time.perf_counter()
@@ -326,7 +442,20 @@ def basilisk_pooled(cases, cores):
 
 
 def basilisk_fresh_process(case_json):
-    """Wall time of one case in a fresh interpreter (imports, build, run)."""
+    """Run one case in a fresh interpreter (``montecarlo.py --basilisk-case JSON``).
+
+    Parameters
+    ----------
+    case_json : str
+        A :func:`basilisk_case` description as JSON.
+
+    Returns
+    -------
+    seconds : float
+        Wall time of the process (interpreter, imports, build, run).
+    result : dict
+        :func:`basilisk_case`'s result.
+    """
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, __file__, "--basilisk-case", case_json], check=True, capture_output=True,
                          text=True).stdout
@@ -334,10 +463,30 @@ def basilisk_fresh_process(case_json):
 
 
 def stats(xs):
+    """``(best, median)`` of the timings ``xs``."""
     return min(xs), statistics.median(xs)
 
 
 def part_a(samples, repeats, bsk_cases, fresh, fine, cores, workers):
+    """Measure and print part A, the B-dot Monte Carlo against Basilisk.
+
+    Parameters
+    ----------
+    samples : int
+        Cases of the sweep.
+    repeats : int
+        Alternated repeats of the orbatt rows (Basilisk's pool: at most 2).
+    bsk_cases : int
+        Cases per Basilisk pool measurement.
+    fresh : int
+        Cases run in a fresh interpreter (at most ``repeats``).
+    fine : bool
+        Also run the agreement case at :data:`BSK_DT_FINE`.
+    cores : int
+        Processes of Basilisk's pools; the divisor of ``time per case x N``.
+    workers : int
+        ``orbatt sweep --workers``.
+    """
     from orbatt.sweep import load_sweep
 
     folder = Path(tempfile.mkdtemp(prefix="orbatt-mc-"))
@@ -457,6 +606,15 @@ def env_scenarios(folder):
 
 
 def part_b(n_members, repeats):
+    """Measure and print part B, the environment-torque ensemble against the gravity gradient.
+
+    Parameters
+    ----------
+    n_members : int
+        Ensemble members.
+    repeats : int
+        Alternated repeats (``dop853-lanes``: at most 2).
+    """
     import orbatt
     from astropy import units as u
 
@@ -534,6 +692,7 @@ def part_b(n_members, repeats):
 
 
 def main(argv=None):
+    """The command line (``--help``)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="N = 200 B-dot cases, 50 members, fewer repeats")
     ap.add_argument("--workers", type=int, default=2, help="orbatt sweep --workers (default 2)")
