@@ -17,13 +17,14 @@ field). Rows:
   every core; the scenario loaded, the kernels compiled and cached before the timing);
 * orbatt as a whole process: ``orbatt sweep FILE --workers 2 -o OUT.nc`` (interpreter start,
   imports, the Dask local cluster and its workers' start, the sweep, the netCDF file);
-* Basilisk 2.12, one simulation per case as its Monte Carlo framework runs them
-  (``Basilisk.utilities.MonteCarlo.Controller`` opens a ``multiprocessing.Pool`` of
-  ``cores`` processes per batch of ``cores`` cases, each process builds, initializes and
-  executes one simulation and retains its messages): the same pattern here, measured on a few
-  cases and scaled, ``time per case x N / cores``. Also printed: a case in a fresh
-  interpreter (``python montecarlo.py --basilisk-case K``, imports included), and
-  ``ExecuteSimulation`` alone.
+* Basilisk 2.12 with its own Monte Carlo framework, ``Basilisk.utilities.MonteCarlo.Controller``
+  (``setThreadCount(cores)``: a fresh ``multiprocessing.Pool`` of ``cores`` processes per batch
+  of ``cores`` runs, each process building, initializing and executing one simulation; a
+  ``RetentionPolicy`` keeping ``omega_BN_B`` of every task step, archived as the framework does),
+  run on a few copies of one case (no dispersions: the same work as a dispersed case) and
+  scaled, ``time per case x N / cores``. Also printed: a case in a fresh interpreter
+  (``python montecarlo.py --basilisk-case JSON``, imports included) and ``ExecuteSimulation``
+  alone, one process at a time.
 
 The Basilisk case: ``spacecraft.Spacecraft`` with the case's inertia (centre of mass at B),
 point-mass Earth with orbatt's GM, the orbit from the same elements (``elem2rv``), identity
@@ -57,7 +58,6 @@ import cProfile
 import io
 import json
 import math
-import multiprocessing as mp
 import os
 import pstats
 import re
@@ -254,29 +254,27 @@ def _bdot_class():
     return BDot
 
 
-def basilisk_case(case, dt=BSK_DT):
-    """Build, initialize and execute one B-dot case in Basilisk.
+def basilisk_build(case, dt=BSK_DT):
+    """Build one B-dot case as a Basilisk simulation (not initialized).
 
     Parameters
     ----------
     case : dict
-        ``inertia`` (kg m2, 3), ``omega`` (rad/s, 3), ``t_end`` (s), ``elements`` (a m, e, i,
-        raan, argp, true anomaly rad), ``gm`` (m3/s2), ``coefficients`` (T), ``c0`` (3x3),
-        ``gain``, ``max_dipole``, ``detumble_rate`` (rad/s).
+        See :func:`basilisk_case`.
     dt : float
         Task step (s).
 
     Returns
     -------
-    dict
-        ``detumble_time`` (s, NaN if never), ``final_rate`` (rad/s, 3), ``execute_s``
-        (``ExecuteSimulation``), ``build_s`` (building and ``InitializeSimulation``).
+    SimulationBaseClass.SimBaseClass
+        The simulation, with ``msgRecList = {"state": recorder of the spacecraft state}`` (what
+        a Monte Carlo retention policy reads), ``stop_ns`` and its modules kept alive in
+        ``keep``.
     """
     from Basilisk.architecture import messaging
     from Basilisk.simulation import GravityGradientEffector, MtbEffector, magneticFieldCenteredDipole, spacecraft
     from Basilisk.utilities import SimulationBaseClass, orbitalMotion, simIncludeGravBody
 
-    t0 = time.perf_counter()
     sim = SimulationBaseClass.SimBaseClass()
     sim.CreateNewProcess("proc").addTask(sim.CreateNewTask("task", round(dt * 1e9)))
     sc = spacecraft.Spacecraft()
@@ -326,8 +324,35 @@ def basilisk_case(case, dt=BSK_DT):
         sim.AddModelToTask("task", model, priority)
     rec = sc.scStateOutMsg.recorder()
     sim.AddModelToTask("task", rec, 10)
+    sim.msgRecList = {"state": rec}
+    sim.stop_ns = round(case["t_end"] / dt) * round(dt * 1e9)
+    sim.keep = [sc, grav, gg, mag, bdot, config_msg, mtb]
+    return sim
+
+
+def basilisk_case(case, dt=BSK_DT):
+    """Build, initialize and execute one B-dot case in Basilisk.
+
+    Parameters
+    ----------
+    case : dict
+        ``inertia`` (kg m2, 3), ``omega`` (rad/s, 3), ``t_end`` (s), ``elements`` (a m, e, i,
+        raan, argp, true anomaly rad), ``gm`` (m3/s2), ``coefficients`` (T), ``c0`` (3x3),
+        ``gain``, ``max_dipole``, ``detumble_rate`` (rad/s).
+    dt : float
+        Task step (s).
+
+    Returns
+    -------
+    dict
+        ``detumble_time`` (s, NaN if never), ``final_rate`` (rad/s, 3), ``execute_s``
+        (``ExecuteSimulation``), ``build_s`` (building and ``InitializeSimulation``).
+    """
+    t0 = time.perf_counter()
+    sim = basilisk_build(case, dt)
+    rec = sim.msgRecList["state"]
     sim.InitializeSimulation()
-    sim.ConfigureStopTime(round(case["t_end"] / dt) * round(dt * 1e9))
+    sim.ConfigureStopTime(sim.stop_ns)
     t1 = time.perf_counter()
     sim.ExecuteSimulation()
     t2 = time.perf_counter()
@@ -408,37 +433,66 @@ def orbit_elements(orbit):
     return (el["a"] * 1e3, el["e"], el["i"], el["raan"], el["argp"], el["true_anomaly"])
 
 
-def _pool_worker(case):
-    """One case in a pool process (:func:`basilisk_case` at the default task step)."""
-    return basilisk_case(case)
+#: the case every run of :func:`basilisk_controller` builds (set before the pool forks)
+_CONTROLLER_CASE = {}
 
 
-def basilisk_pooled(cases, cores):
-    """Run cases as Basilisk's Monte Carlo ``Controller`` runs them: a fresh
-    ``multiprocessing.Pool(cores)`` (fork) per batch of ``cores`` cases, one simulation per
-    process.
+def _controller_create():
+    """The Controller's simulation function: build :data:`_CONTROLLER_CASE`."""
+    return basilisk_build(_CONTROLLER_CASE["case"], BSK_DT)
+
+
+def _controller_execute(sim):
+    """The Controller's execution function: initialize and run to the end."""
+    sim.InitializeSimulation()
+    sim.ConfigureStopTime(sim.stop_ns)
+    sim.ExecuteSimulation()
+
+
+def basilisk_controller(case, runs, cores, folder):
+    """Run ``runs`` copies of a case with Basilisk's own ``MonteCarlo.Controller``.
+
+    No dispersions (every run is ``case``: the same work as a dispersed one); the retention
+    policy keeps the spacecraft state's ``omega_BN_B`` of every task step, archived in ``folder``
+    as the framework does.
 
     Parameters
     ----------
-    cases : list of dict
-        :func:`basilisk_case` descriptions.
+    case : dict
+        A :func:`basilisk_case` description.
+    runs : int
+        Runs (a multiple of ``cores`` keeps every pool full).
     cores : int
-        Processes per pool.
+        ``setThreadCount``: processes per pool.
+    folder : Path
+        The archive's parent folder.
 
     Returns
     -------
     seconds : float
-        Wall time of all the batches.
-    results : list of dict
-        :func:`basilisk_case`'s results, in order.
+        Wall time of ``executeSimulations()``.
+    failed : list of int
+        The runs that failed.
     """
-    ctx = mp.get_context("fork")
-    results = []
+    from Basilisk.utilities.MonteCarlo.Controller import Controller
+    from Basilisk.utilities.MonteCarlo.RetentionPolicy import RetentionPolicy
+
+    _CONTROLLER_CASE["case"] = case
+    mc = Controller()
+    mc.setSimulationFunction(_controller_create)
+    mc.setExecutionFunction(_controller_execute)
+    mc.setExecutionCount(runs)
+    mc.setArchiveDir(str(Path(folder) / "basilisk-mc"))
+    mc.setShouldDisperseSeeds(False)
+    mc.setThreadCount(cores)
+    mc.setVerbose(False)
+    mc.setShowProgressBar(False)
+    policy = RetentionPolicy()
+    policy.addMessageLog("state", ["omega_BN_B"])
+    mc.addRetentionPolicy(policy)
     t0 = time.perf_counter()
-    for lo in range(0, len(cases), cores):
-        with ctx.Pool(cores) as pool:
-            results += pool.map(_pool_worker, cases[lo:lo + cores])
-    return time.perf_counter() - t0, results
+    failed = mc.executeSimulations()
+    return time.perf_counter() - t0, failed
 
 
 def basilisk_fresh_process(case_json):
@@ -475,9 +529,9 @@ def part_a(samples, repeats, bsk_cases, fresh, fine, cores, workers):
     samples : int
         Cases of the sweep.
     repeats : int
-        Alternated repeats of the orbatt rows (Basilisk's pool: at most 2).
+        Alternated repeats of the orbatt rows (Basilisk's Controller: at most 2).
     bsk_cases : int
-        Cases per Basilisk pool measurement.
+        Runs per measurement with Basilisk's Controller.
     fresh : int
         Cases run in a fresh interpreter (at most ``repeats``).
     fine : bool
@@ -505,18 +559,19 @@ def part_a(samples, repeats, bsk_cases, fresh, fine, cores, workers):
     except ImportError:
         have_bsk = False
         print("Basilisk is not importable (pip install bsk): its rows are skipped")
-    cases = bdot_cases(sweep, range(max(bsk_cases, 1))) if have_bsk else []
+    cases = bdot_cases(sweep, [0]) if have_bsk else []
     if have_bsk:  # the parent imports Basilisk before forking, as the Controller's script does
         from Basilisk.simulation import spacecraft  # noqa: F401
-    tin, tcli, tpool, bres, tfresh, fres = [], [], [], [], [], []
+    tin, tcli, tpool, tfresh, fres = [], [], [], [], []
     for rep in range(repeats):   # alternate the measurements
         s, ds = orbatt_inprocess(path)
         tin.append(s)
         tcli.append(orbatt_cli(path, workers, folder))
         if have_bsk and rep < 2:
-            s, res = basilisk_pooled(cases, cores)
+            s, failed = basilisk_controller(cases[0], bsk_cases, cores, folder)
+            if failed:
+                raise RuntimeError(f"Basilisk's Controller: runs {failed} failed")
             tpool.append(s)
-            bres += res
         if have_bsk and rep < fresh:
             s, r = basilisk_fresh_process(json.dumps(cases[0]))
             tfresh.append(s)
@@ -529,21 +584,20 @@ def part_a(samples, repeats, bsk_cases, fresh, fine, cores, workers):
     rows.append((f"orbatt sweep --workers {workers} (whole process)", b_cli, m_cli, b_cli / samples))
     bsk = {}
     if have_bsk:
-        bsk["pool"] = stats([s * cores / len(cases) for s in tpool])
-        rows.append((f"Basilisk, Pool({cores}) per {cores} cases (Controller)", *(x * samples / cores for x in bsk["pool"]),
-                     bsk["pool"][0]))
+        bsk["pool"] = stats([s * cores / bsk_cases for s in tpool])
+        rows.append(("Basilisk MonteCarlo.Controller", *(x * samples / cores for x in bsk["pool"]), bsk["pool"][0]))
         if tfresh:
             bsk["fresh"] = stats(tfresh)
             rows.append(("Basilisk, a fresh interpreter per case", *(x * samples / cores for x in bsk["fresh"]),
                          bsk["fresh"][0]))
-        serial = [r["execute_s"] for r in fres] or [r["execute_s"] for r in bres]
+        serial = [r["execute_s"] for r in fres]
         bsk["execute"] = stats(serial)
         rows.append(("Basilisk, ExecuteSimulation alone", *(x * samples / cores for x in bsk["execute"]),
                      bsk["execute"][0]))
         print(f"Basilisk: task step {BSK_DT:g} s, RK4; per case: build + InitializeSimulation "
-              f"{min(r['build_s'] for r in bres) * 1e3:.0f} ms, ExecuteSimulation {bsk['execute'][0]:.2f} s "
-              f"(best of {len(serial)}, one process at a time; {min(r['execute_s'] for r in bres):.2f} s with "
-              f"{cores} at once); the Basilisk rows are time per case x N / {cores}")
+              f"{min(r['build_s'] for r in fres) * 1e3:.0f} ms, ExecuteSimulation {bsk['execute'][0]:.2f} s "
+              f"(best of {len(serial)}, one process at a time); Controller: {len(tpool)} x {bsk_cases} runs on "
+              f"{cores} processes; the Basilisk rows are time per case x N / {cores}")
     print(f"\n{'what':<50} {'best':>9} {'median':>9} {'per case':>10} {'body-orbits/s':>14} "
           f"{'vs Controller':>14} {'vs Execute':>11}")
     for label, best, med, per in rows:
@@ -559,7 +613,7 @@ def part_a(samples, repeats, bsk_cases, fresh, fine, cores, workers):
               f"detumble time (|omega| < {math.degrees(cases[k]['detumble_rate']):g} deg/s for good), "
               "final |omega|")
         print(f"  orbatt (dop853 rtol 1e-9, continuous law)      {od:9.1f} s   {math.degrees(ow):.4f} deg/s")
-        r = bres[0]
+        r = fres[0]
         print(f"  Basilisk, task step {BSK_DT:g} s                     {r['detumble_time']:9.1f} s   "
               f"{math.degrees(np.linalg.norm(r['final_rate'])):.4f} deg/s")
         for dt in BSK_DT_FINE if fine else ():
@@ -700,6 +754,10 @@ def main(argv=None):
     ap.add_argument("--basilisk-case", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.basilisk_case:   # one case in this fresh interpreter (imports counted by the parent)
+        from Basilisk.simulation import (GravityGradientEffector, MtbEffector,  # noqa: F401
+                                         magneticFieldCenteredDipole, spacecraft)
+        from Basilisk.utilities import SimulationBaseClass, orbitalMotion, simIncludeGravBody  # noqa: F401
+        _bdot_class()
         r = basilisk_case(json.loads(args.basilisk_case))
         print(json.dumps(r))
         return
