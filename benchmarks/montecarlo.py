@@ -1,7 +1,7 @@
 """Monte Carlo studies (issue 23, item 5): orbatt's sweeps against Basilisk's one process per
 case, and the environment-torque ensemble against the gravity-gradient-only one.
 
-    python benchmarks/montecarlo.py            # about 3 minutes on 2 cores
+    python benchmarks/montecarlo.py            # about 3-4 minutes on 2 cores
     python benchmarks/montecarlo.py --quick    # smaller N, fewer repeats (about 1 minute)
 
 Prints two tables of ratios against baselines measured in the same run (no number here is
