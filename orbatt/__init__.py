@@ -32,6 +32,7 @@ _WHERE = {
     "KeplerOrbit": ".orbits", "ReboundOrbit": ".orbits", "TleOrbit": ".orbits",
     "EnvironmentTorques": ".torques", "Facet": ".torques",
     "BDotControl": ".control", "PDControl": ".control", "ReactionWheel": ".control",
+    "rpm": ".units",
     "Sweep": ".sweep", "load_sweep": ".sweep", "run_sweep": ".sweep",
 }
 _SUBMODULES = {"canonical", "euler", "quaternion", "orbital", "methods"}
@@ -44,7 +45,7 @@ __all__ = [
     "KeplerOrbit", "ReboundOrbit", "TleOrbit", "GravityGradient", "EnvironmentTorques", "Facet", "ReactionWheel", "PDControl", "BDotControl", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
     "to_dataset", "open_dataset", "write_aem", "read_aem",
-    "Sweep", "SweepError", "load_sweep", "run_sweep",
+    "Sweep", "SweepError", "load_sweep", "run_sweep", "rpm",
 ]
 
 

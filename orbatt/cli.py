@@ -7,7 +7,7 @@ Contract (other tools call these; keep the names)::
                  [--worker-timeout SECONDS] [--resume] [--seed S] [--quiet]
     orbatt info OUT.nc
     orbatt export OUT.nc --aem FILE [--attitude q|q_orbital] [--case N] [--time-system S] [--ref-frame NAME]
-    orbatt plot OUT.nc -o DIR
+    orbatt plot OUT.nc -o DIR       (DIR/OUT-pointing.png, -rates, -wheels, -torques, -drift: what OUT holds)
     orbatt scenarios
     orbatt --version
 
@@ -43,7 +43,8 @@ def _parser():
     r = sub.add_parser("run", help="run a scenario file and write its Dataset to NetCDF")
     r.add_argument("scenario", help="scenario TOML file (or the name of a shipped scenario)")
     r.add_argument("-o", "--output", help="output NetCDF file (default: SCENARIO.nc in the current folder)")
-    r.add_argument("--plot", metavar="DIR", help="also write PNG figures to DIR")
+    r.add_argument("--plot", metavar="DIR", help="also write PNG figures to DIR (NAME-pointing.png, -rates, -wheels, "
+                                                 "-torques, -drift: those the result's content calls for)")
     r.add_argument("--aem", metavar="FILE", help="also write the attitude q as a CCSDS AEM (needs an epoch; "
                                                  "as 'orbatt export' with its defaults)")
     r.add_argument("--method", help="override [integration] method")
@@ -80,9 +81,9 @@ def _parser():
     e.add_argument("--ref-frame", metavar="NAME", help="REF_FRAME_A: the inertial frame of your orbit elements "
                    "(default EME2000; RTN for q_orbital)")
 
-    pl = sub.add_parser("plot", help="write PNG figures of a result file")
+    pl = sub.add_parser("plot", help="write PNG figures of a result file (an ensemble: every case)")
     pl.add_argument("file")
-    pl.add_argument("-o", "--output", required=True, metavar="DIR")
+    pl.add_argument("-o", "--output", required=True, metavar="DIR", help="folder of the figures FILE-FIGURE.png")
 
     sub.add_parser("scenarios", help="list the shipped scenarios")
     return p
@@ -158,7 +159,7 @@ def _run(args, cold):
         if not args.quiet:
             print(f"AEM: {aem}")
     if args.plot:
-        for f in write_plots(ds, args.plot, stem=stem):
+        for f in write_plots(ds, args.plot, stem=stem, what="--plot"):
             if not args.quiet:
                 print(f"figure: {f}")
     if not int(ds.attrs.get("integration_complete", 1)):
@@ -188,6 +189,9 @@ def _output_path(args, sc, *, zarr=False):
     from .dataset import check_output_path, file_name
     from .errors import InputError
 
+    if args.output is not None and not args.output.strip():
+        raise InputError(f"-o: {args.output!r} is an empty path; give an output file such as -o result.nc (or leave "
+                         "-o out for NAME.nc)")
     what = "-o" if args.output else "name"
     out = Path(args.output) if args.output else Path(file_name(sc.name, ".nc"))
     src = Path(sc.path) if getattr(sc, "path", None) is not None else None
@@ -198,27 +202,27 @@ def _output_path(args, sc, *, zarr=False):
 
 
 def _plot_stem(args, sc):
-    """The stem of the ``--plot`` figure names (``NAME-state.png`` ...), checked before the
-    run: ``name`` must be a plain file name, and ``--plot`` a folder (or a path to create)."""
+    """The stem of the ``--plot`` figure names (``NAME-pointing.png`` ...), checked before the
+    run (:func:`orbatt.dataset.figure_files.check_figure_folder`, for every figure the run may
+    draw): ``name`` a plain file name, ``--plot`` a writable folder (or a path to create in
+    one), and no link or foreign file where a figure goes."""
     if not args.plot:
         return None
-    from .dataset import file_name
-    from .errors import InputError
+    from .dataset.figure_files import check_figure_folder
 
-    file_name(sc.name, "-attitude.png")  # the longest of the three names
-    folder = Path(args.plot)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"--plot: {args.plot!r} exists and is not a folder; give a folder for the figures")
+    check_figure_folder(args.plot, sc.name, what="--plot")
     return sc.name
 
 
 def _aem_path(args, sc, out):
     """The ``--aem`` file of ``run``, checked before the run: the scenario needs an epoch, and
     the path the checks of ``-o`` (:func:`_checked_aem`), other than the NetCDF output."""
-    if not args.aem:
+    if args.aem is None:
         return None
     from .errors import InputError
 
+    if not args.aem.strip():
+        raise InputError(f"--aem: {args.aem!r} is an empty path; give a file such as --aem attitude.aem")
     if sc.spec.dimensionless or sc.orbit is None or getattr(sc.orbit, "epoch", None) is None:
         raise InputError("--aem: an AEM needs absolute times and this scenario has no epoch (no [orbit] with "
                          "epoch); add one or leave --aem out")
@@ -235,6 +239,8 @@ def _checked_aem(path, source=None):
     from .dataset.aem import is_orbatt_aem
     from .errors import InputError
 
+    if not path.strip():
+        raise InputError(f"--aem: {path!r} is an empty path; give a file such as --aem attitude.aem")
     p = Path(path)
     if source is not None and Path(source).is_file() and p.exists() and os.path.samefile(source, p):
         raise InputError(f"--aem: {path!r} is the file being read; give another path such as 'attitude.aem'")
@@ -348,14 +354,28 @@ def _cmd_info(args):
 
 def _cmd_plot(args):
     from .dataset import open_dataset
+    from .dataset.figure_files import check_figure_folder, figure_notes
     from .errors import InputError
 
-    ds = open_dataset(_existing(args.file), load=True)
-    if "sweep_format" in ds.attrs:
-        raise InputError(f"file: {args.file!r} is a sweep result; orbatt plot draws one run (select a case in "
-                         "Python: ds.isel(case=k))")
+    src = _existing(args.file)
+    check_figure_folder(args.output, Path(args.file).stem, what="-o", figures=())  # the folder, before reading
+    ds = open_dataset(src, load=True)
+    if "time" not in ds.dims or "omega" not in ds.variables:
+        if "sweep_format" not in ds.attrs or "case" not in ds.dims:
+            raise InputError(f"file: {args.file!r} has neither time histories nor per-case outputs; give the "
+                             "output of 'orbatt run' or 'orbatt sweep'")
+        from .dataset.figure_files import write_figures
+        from .dataset.sweep_figures import SWEEP_FIGURES, draw_sweep
+
+        # a sweep's per-case outputs: their distributions and their scatter against the parameters
+        for f in write_figures(ds, args.output, Path(args.file).stem, what="-o", figures=SWEEP_FIGURES,
+                               draw_figure=draw_sweep):
+            print(f)
+        return 0
     _check_variables(ds, args.file, RUN_VARIABLES, "a run result")
-    for f in write_plots(ds, args.output, stem=Path(args.file).stem):
+    for note in figure_notes(ds):
+        print(f"orbatt: note: {note}", file=sys.stderr)
+    for f in write_plots(ds, args.output, stem=Path(args.file).stem, what="-o"):
         print(f)
     return 0
 
@@ -374,10 +394,15 @@ def _check_variables(ds, path, names, what):
 def _cmd_scenarios(args):
     from .scenario import shipped_scenarios
 
+    import shutil
+    import textwrap
+
     rows = shipped_scenarios()
     width = max(len(n) for n, _, _ in rows)
-    for name, desc, _ in rows:
-        print(f"{name:<{width}}  {desc}")
+    columns = max(shutil.get_terminal_size((100, 24)).columns, width + 40)
+    for name, desc, _ in rows:  # the description re-wrapped, its lines indented under the first
+        print(textwrap.fill(" ".join(desc.split()), width=columns - 1, initial_indent=f"{name:<{width}}  ",
+                            subsequent_indent=" " * (width + 2), break_on_hyphens=False))
     return 0
 
 
@@ -426,29 +451,15 @@ def summary(ds, title="", wall=None) -> str:
     return "\n".join(lines)
 
 
-def write_plots(ds, folder, stem="orbatt"):
-    """Write the standard figures (state, attitude, drift) as PNG files ``folder/STEM-KIND.png``;
-    return their paths. ``stem`` must be a plain file name (:func:`orbatt.dataset.file_name`:
-    names with path separators, control characters or a leading ``.`` are refused), so the
-    figures stay in ``folder``."""
-    import matplotlib
+def write_plots(ds, folder, stem="orbatt", what="--plot"):
+    """Write the figures the content of ``ds`` calls for (pointing, rates, wheels, torques,
+    drift: :func:`orbatt.dataset.figure_data.choose_figures`) as ``folder/STEM-FIGURE.png``,
+    atomically and never over a link or a file that is not an orbatt figure
+    (:func:`orbatt.dataset.figure_files.write_figures`; errors name ``what``); return their
+    paths. ``stem`` must be a plain file name (:func:`orbatt.dataset.file_name`)."""
+    from .dataset.figure_files import write_figures
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .dataset import file_name
-
-    folder = Path(folder)
-    names = {kind: file_name(stem, f"-{kind}.png", what="name") for kind in ("state", "attitude", "drift")}
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for kind, name in names.items():
-        fig = getattr(ds.orbatt, f"plot_{kind}")()
-        path = folder / name
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-        paths.append(path)
-    return paths
+    return write_figures(ds, folder, stem, what=what)
 
 
 def main(argv=None) -> int:

@@ -54,6 +54,7 @@ import sys
 import time
 from pathlib import Path
 
+from .cachedir import cache_folder
 from .shipped import scenario_file
 
 __all__ = ["ENV_MODE", "LONG_RUN_S", "PROJECT_AFTER_S", "ColdStart", "plan", "kernel_key", "fingerprint",
@@ -70,16 +71,9 @@ _PACKAGE = Path(__file__).resolve().parent
 
 
 def stamp_folder() -> Path:
-    """Where the warm stamps and locks live: beside numba's cache of the kernels
-    (``$NUMBA_CACHE_DIR/orbatt``, else ``orbatt/core/__pycache__`` when it is writable, else
-    ``$XDG_CACHE_HOME/orbatt`` or ``~/.cache/orbatt``, numba's user-wide fallback)."""
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return Path(os.environ["NUMBA_CACHE_DIR"]) / "orbatt"
-    in_tree = _PACKAGE / "core" / "__pycache__"
-    if os.access(in_tree if in_tree.is_dir() else in_tree.parent, os.W_OK):
-        return in_tree
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "orbatt"
+    """Where the warm stamps and locks live: orbatt's cache folder
+    (:func:`orbatt.cachedir.cache_folder`, beside numba's cache of the kernels)."""
+    return cache_folder()
 
 
 def fingerprint() -> dict:

@@ -273,9 +273,10 @@ def angle_between(a, b):
     sign of either quaternion."""
     a = normalize(a)
     b = normalize(b)
-    # 2 atan2(|a - b|, |a + b|) is accurate for small angles where 2 acos|a.b| is not
+    # the angle phi between the unit 4-vectors is half the rotation angle, and
+    # phi = 2 atan2(|a - b|, |a + b|) is accurate for small angles where acos|a.b| is not
     s = np.where(dot(a, b) < 0, -1.0, 1.0)[..., None]
-    return 2.0 * np.arctan2(norm(a - s * b), norm(a + s * b))
+    return 4.0 * np.arctan2(norm(a - s * b), norm(a + s * b))
 
 
 def from_axis_angle(axis, angle):

@@ -20,6 +20,7 @@ import numpy as np
 from astropy import units as u
 
 from . import units as U
+from .core import environment as kenv
 from .core import model as km
 from .core.kinds import BY_NAME
 from .core import potentials as kp
@@ -31,8 +32,11 @@ from .errors import InputError
 from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
 
-__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "sample_margin"]
+__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "FIELDS_SOURCE", "sample_margin"]
 
+#: where the Dataset's environment fields come from (its variables' ``source`` attribute)
+FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
+                 "interpolated; docs/design.md section 10)")
 #: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
 TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
 _AREA = u.m**2
@@ -245,6 +249,7 @@ class EnvironmentTorques(Potential):
         else:
             self.kind, self.params, self.table = orbit.kernel()
         self._fields = {}
+        self._field_tables = {}  # the spline tables build_model made: density, sun, field
 
     # --- the kernel model
     def _samples(self, step):
@@ -279,11 +284,13 @@ class EnvironmentTorques(Potential):
             s = self._samples(DENSITY_STEP)
             dens = tabulate(s, self.atmosphere.density) * 1.0
             dens[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
+            self._field_tables["density"] = dens
             F = np.array([f.row(f.drag_coefficient * f.area.to_value(u.km**2)) for f in self.facets])
             rows.append((km.DRAG, km.drag_params(F, EARTH_ROTATION_RATE if self.corotation else 0.0), dens))
         if self.srp:
             s = self._samples(SUN_STEP)
             sun = tabulate(s, lambda t, r: esun.sun_position(t))
+            self._field_tables["sun"] = sun
             F = np.array([f.row(f.area.to_value(u.km**2)) for f in self.facets])
             pressure = esun.SRP_FLUX / esun.SPEED_OF_LIGHT * 1e3  # N m^-2 -> kg km^-1 s^-2
             shadow = {"none": km.SHADOW_NONE, "cylindrical": km.SHADOW_CYLINDRICAL,
@@ -291,7 +298,8 @@ class EnvironmentTorques(Potential):
             rows.append((km.SRP, km.srp_params(F, pressure, esun.AU, shadow, R_EARTH_WGS84, esun.R_SUN), sun))
         if self.residual_dipole is not None:
             s = self._samples(MAGNETIC_FIELD_STEP)
-            rows.append((km.MAGNETIC, self.residual_dipole * 1e-6, tabulate(s, self.magnetic_field.field)))
+            self._field_tables["field"] = tabulate(s, self.magnetic_field.field)
+            rows.append((km.MAGNETIC, self.residual_dipole * 1e-6, self._field_tables["field"]))
         if self.constant_torque is not None:
             rows.append((km.CONSTANT_TORQUE, self.constant_torque * 1e-6, None))  # N m -> kg km^2 s^-2
         self.term_kinds = [r[0] for r in rows]
@@ -346,8 +354,10 @@ class EnvironmentTorques(Potential):
     def fields(self, t):
         """The environment along the orbit at the times ``t`` (s): a dict of ``density``
         (kg m^-3), ``magnetic_field`` (T, inertial), ``sun_direction`` (inertial unit vector)
-        and ``shadow`` (0 umbra .. 1 full Sun), those the terms use; the models evaluated
-        directly, not the kernel's tables."""
+        and ``shadow`` (0 umbra .. 1 full Sun), those the terms use: the kernel's own tables
+        (:data:`FIELDS_SOURCE`: the splines the integration read, no second pass of the
+        libraries) at times inside the sampled span, the models themselves elsewhere (or
+        before the model is built)."""
         t = np.asarray(t, dtype=np.float64)
         out = {}
         if not (self.drag or self.srp or self.residual_dipole is not None):
@@ -356,12 +366,17 @@ class EnvironmentTorques(Potential):
         pos, _ = self.orbit.state(t)
         pos = np.asarray(U.strip(pos, u.km, "position", allow_plain=True), dtype=np.float64)
         time = None if epoch is None else epoch + t * u.s
+        tabs = self._field_tables if self.span is not None and t.size and self.span[0] <= t.min() \
+            and t.max() <= self.span[1] else {}
         if self.drag:
-            out["density"] = np.asarray(self.atmosphere.density(time, pos), dtype=np.float64)
+            out["density"] = (kenv.spline_eval_many(tabs["density"], np.ascontiguousarray(t), 1)[:, 0] * 1e-9
+                              if "density" in tabs else np.asarray(self.atmosphere.density(time, pos), dtype=np.float64))
         if self.residual_dipole is not None:
-            out["magnetic_field"] = np.asarray(self.magnetic_field.field(time, pos), dtype=np.float64)
+            out["magnetic_field"] = (kenv.spline_eval_many(tabs["field"], np.ascontiguousarray(t), 3) if "field" in tabs
+                                     else np.asarray(self.magnetic_field.field(time, pos), dtype=np.float64))
         if self.srp:
-            sun = np.asarray(esun.sun_position(time), dtype=np.float64)
+            sun = (kenv.spline_eval_many(tabs["sun"], np.ascontiguousarray(t), 3) if "sun" in tabs
+                   else np.asarray(esun.sun_position(time), dtype=np.float64))
             d = sun - pos
             out["sun_direction"] = d / np.linalg.norm(d, axis=-1, keepdims=True)
             out["shadow"] = (np.ones(t.shape) if self.shadow == "none" else

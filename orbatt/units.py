@@ -31,8 +31,11 @@ ENERGY = u.kg * u.km**2 / u.s**2
 RATE = u.rad / u.s
 GM = u.km**3 / u.s**2
 DIMENSIONLESS = u.dimensionless_unscaled
-#: revolutions per minute (reaction-wheel speeds, ``"1000 rpm"``), enabled in astropy's parser
+#: revolutions per minute (reaction-wheel speeds, ``"1000 rpm"``), enabled in astropy's parser:
+#: the unit scenario files read, for Python too (``1000 * orbatt.rpm``, ``orbatt.units.rpm``;
+#: ``u.Unit("rpm")`` once orbatt.units is imported)
 RPM = u.def_unit("rpm", u.cycle / u.min, doc="revolutions per minute")
+rpm = RPM
 u.add_enabled_units([RPM])
 
 #: CF/UDUNITS unit spellings orbatt writes, with the astropy unit each one parses to. Exponents
@@ -131,7 +134,7 @@ def strip(value, unit, name, *, allow_plain=False):
                     raise u.UnitConversionError(name)
                 out = value.to_value(unit, equivalencies=u.dimensionless_angles())
             except u.UnitConversionError:
-                raise InputError(f"{name}: {value} has the wrong dimension; expected a {unit.physical_type} "
+                raise InputError(f"{name}: {value} has the wrong dimension; expected {dimension_phrase(unit)} "
                                  f"such as '1 {unit.to_string()}'") from None
         if type(out) is np.float64:  # one value: the check below without numpy's ~2 us on a scalar
             _check_finite(out, value, name)
@@ -145,6 +148,17 @@ def strip(value, unit, name, *, allow_plain=False):
         _require_unit(value, unit, name, allow_plain)
     _check_finite(out, value, name)
     return out
+
+
+def dimension_phrase(unit) -> str:
+    """The dimension of ``unit`` in words with its article, for messages: ``"a length"``,
+    ``"an angular frequency"`` (the first of astropy's names), or ``"a quantity in A m2 s /
+    T"`` where astropy has no name for it."""
+    names = str(unit.physical_type).split("/")
+    kind = "torque" if "torque" in names else names[0]  # N m: a torque in orbatt's keys, not an energy
+    if kind == "unknown":
+        return f"a quantity in {unit.to_string()}"
+    return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
 
 
 def unit_string(unit) -> str:

@@ -260,3 +260,12 @@ def test_mul_of_few_quaternions_is_bitwise_the_product_of_many():
             assert few.tobytes() == many[k:k + 2].tobytes()
         # broadcasting: one quaternion against a few
         assert qt.mul(many_a[0], many_b[:3]).tobytes() == qt.mul(np.tile(many_a[0], (400, 1)), many_b)[:3].tobytes()
+
+
+@pytest.mark.parametrize("deg", [1e-6, 0.5, 30.0, 90.0, 179.0, 180.0])
+def test_angle_between_is_the_rotation_angle(deg):
+    """A rotation of ``deg`` about any axis is ``deg`` away (it returned half of it)."""
+    a = qt.from_axis_angle([0.3, -0.5, 0.8], 0.4)
+    b = qt.mul(a, qt.from_axis_angle([1.0, 2.0, -0.5], np.radians(deg)))
+    assert np.degrees(qt.angle_between(a, b)) == pytest.approx(deg, rel=1e-12, abs=1e-12)
+    assert np.degrees(qt.angle_between(a, -b)) == pytest.approx(deg, rel=1e-12, abs=1e-12)  # q and -q alike

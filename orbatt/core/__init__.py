@@ -12,7 +12,8 @@ generalized force map), :mod:`.environment` (densities, shadow, spline tables),
 list and the one dispatch on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+
 :mod:`.dop853_coefficients`, :mod:`.verner98_coefficients`, :mod:`.butcher`,
 :mod:`.dop853_lanes`) and :mod:`.splitting` (step loops), :mod:`.free_body` and
-:mod:`.carlson` (the exact torque-free body).
+:mod:`.carlson` (the exact torque-free body); :mod:`.mutual` and :mod:`.mutual_splitting` (a
+binary asteroid: the orbit and both attitudes together, ``docs/design.md`` §12).
 
 The equations as orbatt implements them (signs, frames, the paper's errata, the units inside
 the kernels) and the architecture are written up in ``docs/design.md`` §1, §2, §3, §3a, §4, §5,
@@ -39,6 +40,8 @@ equation  what                                                function
 (15)      ``(q, Q)`` -> Euler angles and momenta              :func:`orbatt.euler.from_canonical`
 (18)      heavy top potential                                 :func:`.potentials.heavy_top`
 (20)      gravity gradient (MacCullagh) potential             :func:`.potentials.gravity_gradient`
+§12       mutual potential to second order, its gradient,     :func:`.mutual.potential_gradient`,
+          torques; the coupled equations; the splitting       :func:`.mutual.rhs_coupled`, :mod:`.mutual_splitting`
 ========  ==================================================  ==========================================
 """
 from __future__ import annotations

@@ -50,12 +50,20 @@ class _CheckedCache(FunctionCache):
             cache_file._source_stamp = (cache_file._source_stamp, core_stamp())
 
     def load_overload(self, sig, target_context):
+        global FAST_LOADS
+        if FAST_LOADS:
+            try:
+                rtsys.initialize(target_context)
+                with self._guard_against_spurious_io_errors():
+                    return self._load_overload(sig, target_context)
+            except (AttributeError, TypeError, NameError):
+                # numba's internals are not the ones the fast load was written for (guarded by
+                # what they do, not by their names): numba's own load from now on
+                FAST_LOADS = False
+            except Exception:  # noqa: BLE001 - an unreadable entry: numba's own load below says so
+                pass
         try:
-            if not FAST_LOADS:
-                return super().load_overload(sig, target_context)
-            rtsys.initialize(target_context)
-            with self._guard_against_spurious_io_errors():
-                return self._load_overload(sig, target_context)
+            return super().load_overload(sig, target_context)
         except Exception as exc:  # noqa: BLE001 - any unreadable entry: recompile instead of failing
             self._discard(exc)
             return None

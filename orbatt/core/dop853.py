@@ -32,7 +32,8 @@ FSAL (the first stage of the next step is evaluated on acceptance, as DOP853's F
 error ``err = |h| sqrt(e / n)``, ``e = sum(((E . K)_i / sk_i)^2)`` with ``E = b - bhat``, and
 the same controller with ``err^(1/9)`` (:func:`controller9`). On the Keplerian benchmark it needs
 ~17 % fewer right-hand-side evaluations than DOP853 at 1e-9 rad, ~9 % fewer at 1e-6 rad, and
-~10 % more on the torque-free body (``benchmarks/verner98.py``).
+~10 % more on the torque-free body (``benchmarks/verner98.py``). A binary's coupled orbit and
+attitudes (:mod:`orbatt.core.mutual`) run in the same loop (:data:`advance_coupled`, ``_verner98``).
 
 Breakpoints: steps also land on the knots of the model's tables, a sampled orbit's samples and
 the environment tables (:func:`orbatt.core.model.next_breakpoint`), where the right-hand
@@ -67,11 +68,12 @@ from .dop853_coefficients import ORDER
 from .gyrostat import rhs_extended
 from .hamiltonian import rhs, rhs_inline
 from .model import next_breakpoint
+from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
 __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "advance_verner98",
-           "advance_wide_verner98", "advance_batch_verner98", "advance_batch_wide_verner98", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
+           "advance_wide_verner98", "advance_batch_verner98", "advance_batch_wide_verner98", "advance_coupled", "advance_coupled_verner98", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE", "PAUSED", "BUFFER_FULL",
            "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED", "FLAG_NONFINITE",
            "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE", "EPS", "CNT_STEPS",
            "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
@@ -294,31 +296,35 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out
 # One trajectory
 
 
-def _initial_step_of(extended):
-    """Hairer's ``hinit`` on the right-hand side of the rigid body or (``extended``) of
-    :func:`orbatt.core.gyrostat.rhs_extended`."""
+def _initial_step_of(extended, coupled=False):
+    """Hairer's ``hinit`` on the right-hand side of the rigid body, or of (``extended``)
+    :func:`orbatt.core.gyrostat.rhs_extended` or (``coupled``) :func:`orbatt.core.mutual.rhs_coupled`."""
 
     def initial_step(t, y, f0, f1, ytmp, inertia, terms, params, table, work, rtol, atol, hmax):
         """Hairer's ``hinit`` (order 8): a first step from the sizes of ``y``, ``f`` and an
         estimate of the second derivative (one extra RHS evaluation)."""
         aQ = atol * momentum_scale(inertia)
-        dnf, dny = hinit_norms(y, f0, atol, aQ, rtol)
+        dnf, dny = hinit_norms_vec(y, f0, atol, inertia, rtol) if coupled else hinit_norms(y, f0, atol, aQ, rtol)
         h = min(hinit_guess(dnf, dny), hmax)
         if not (h > 0.0 and h < np.inf):
             return h
         for i in range(y.shape[0]):
             ytmp[i] = y[i] + h * f0[i]
-        if extended:  # a constant: numba prunes the other branch (its callee is not compiled)
+        if coupled:  # constants: numba prunes the other branches (their callees are not compiled)
+            rhs_coupled(t + h, ytmp, inertia, terms, params, table, work, f1)
+        elif extended:
             rhs_extended(t + h, ytmp, inertia, terms, params, table, work, f1)
         else:
             rhs(t + h, ytmp, inertia, terms, params, table, work, f1)
-        return min(100.0 * abs(h), hinit_refine(hinit_der2(y, f0, f1, atol, aQ, rtol), dnf, h), hmax)
+        der2 = hinit_der2_vec(y, f0, f1, atol, inertia, rtol) if coupled else hinit_der2(y, f0, f1, atol, aQ, rtol)
+        return min(100.0 * abs(h), hinit_refine(der2, dnf, h), hmax)
 
     return jit(initial_step)
 
 
 _initial_step = _initial_step_of(False)
 _initial_step_wide = _initial_step_of(True)
+_initial_step_coupled = _initial_step_of(False, True)
 
 
 #: the Runge-Kutta pairs the step loop runs: ``(N_STAGES, A_PTR, A_COL, A_VAL, C, B, E_HI,
@@ -327,7 +333,7 @@ TABLEAUS = {"dop853": (_dp.N_STAGES, _dp.A_PTR, _dp.A_COL, _dp.A_VAL, _dp.C, _dp
             "verner98": (_vn.N_STAGES, _vn.A_PTR, _vn.A_COL, _vn.A_VAL, _vn.C, _vn.B, _vn.E, _vn.E)}
 
 
-def _advance_of(width, extended, tableau="dop853"):
+def _advance_of(width, extended, tableau="dop853", coupled=False):
     """The one-trajectory step loop for states of ``width`` components (0: any width,
     ``len(y)``), on the rigid body's right-hand side (inlined at the stages) or (``extended``)
     on :func:`orbatt.core.gyrostat.rhs_extended`, with the Runge-Kutta pair ``tableau`` (a key
@@ -338,7 +344,8 @@ def _advance_of(width, extended, tableau="dop853"):
     the extended right-hand side, and they keep the on-disk cache key the same from one process
     to the next (a closure over a dispatcher object would not: it pickles differently in every
     process). The rigid body's loop keeps the constant 8, which LLVM unrolls, so it runs as
-    fast as before wider states existed (measured on the Keplerian case: 1.29 ms both)."""
+    fast as before wider states existed (measured on the Keplerian case: 1.29 ms both). ``coupled``:
+    :func:`orbatt.core.mutual.rhs_coupled`, ``inertia`` its constants ``c`` (``atol * c[C_ATOL + i]``)."""
     N_STAGES, A_PTR, A_COL, A_VAL, C, B, E5, E3 = TABLEAUS[tableau]
     verner = tableau == "verner98"
 
@@ -391,7 +398,9 @@ def _advance_of(width, extended, tableau="dop853"):
         if i_out >= nout:
             return DONE
         if (flags & FLAG_F0_VALID) == 0:
-            if extended:
+            if coupled:
+                rhs_coupled(t, y, inertia, terms, params, table, work, f0)
+            elif extended:
                 rhs_extended(t, y, inertia, terms, params, table, work, f0)
             else:
                 rhs(t, y, inertia, terms, params, table, work, f0)
@@ -400,7 +409,10 @@ def _advance_of(width, extended, tableau="dop853"):
         for i in range(ncomp):
             K[0, i] = f0[i]
         if h <= 0.0:
-            if extended:
+            if coupled:
+                h = _initial_step_coupled(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
+                                          min(max_step, t_out[nout - 1] - t))
+            elif extended:
                 h = _initial_step_wide(t, y, f0, K[1], ytmp, inertia, terms, params, table, work, rtol, atol,
                                       min(max_step, t_out[nout - 1] - t))
             else:
@@ -436,7 +448,9 @@ def _advance_of(width, extended, tableau="dop853"):
                         ytmp[i] += a * K[j, i]
                 for i in range(ncomp):
                     ytmp[i] = y[i] + hh * ytmp[i]
-                if extended:
+                if coupled:
+                    rhs_coupled(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
+                elif extended:
                     rhs_extended(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
                 else:
                     rhs_inline(t + C[s] * hh, ytmp, inertia, terms, params, table, work, K[s])
@@ -455,7 +469,8 @@ def _advance_of(width, extended, tableau="dop853"):
                     if not verner:
                         a3 += E3[j] * kji
                 ynew[i] = y[i] + hh * acc
-                isk = 1.0 / ((atol if i < 4 else aQ) + rtol * max(abs(y[i]), abs(ynew[i])))
+                ai = atol * inertia[C_ATOL + i] if coupled else (atol if i < 4 else aQ)
+                isk = 1.0 / (ai + rtol * max(abs(y[i]), abs(ynew[i])))
                 a5 *= isk
                 e5 += a5 * a5
                 if not verner:
@@ -476,7 +491,9 @@ def _advance_of(width, extended, tableau="dop853"):
             if err <= 1.0:
                 # accepted: FSAL derivative at the new point
                 t_new = t_next if landing else t + hh
-                if extended:
+                if coupled:
+                    rhs_coupled(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
+                elif extended:
                     rhs_extended(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
                 else:
                     rhs(t_new, ynew, inertia, terms, params, table, work, K[N_STAGES])
@@ -530,6 +547,9 @@ advance_wide = _advance_of(0, True)
 advance_verner98 = _advance_of(NDIM, False, "verner98")
 #: :data:`advance_wide` with Verner's 9(8) pair (compiled on first use only)
 advance_wide_verner98 = _advance_of(0, True, "verner98")
+#: the loops of a binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`), DOP853, Verner 9(8)
+advance_coupled = _advance_of(0, False, coupled=True)
+advance_coupled_verner98 = _advance_of(0, False, "verner98", coupled=True)
 
 
 def _batch_of(extended, tableau="dop853"):

@@ -44,8 +44,11 @@ GRAVITY_GRADIENT_KEPLER = 2
 GRAVITY_GRADIENT_SAMPLED = 3
 
 EMPTY_TABLE = np.zeros((0, 0), dtype=np.float64)
-#: scratch slots: 0..2 Kepler's warm start, 3 the sampled orbit, 4..7 environment tables
-WORK_SIZE = 8
+#: most terms of one model that own a sampled table (an environment field, a control law's
+#: field or Sun): each keeps its interval in a slot of ``work``
+MAX_TABLE_TERMS = 28
+#: scratch slots: 0..2 Kepler's warm start, 3 the sampled orbit, 4.. the tables of the terms
+WORK_SIZE = 4 + MAX_TABLE_TERMS
 
 
 def new_work(*batch):

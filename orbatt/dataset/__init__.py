@@ -2,7 +2,9 @@
 (:mod:`~orbatt.dataset.build`), NetCDF export/import, whole or appended as a run goes
 (:mod:`~orbatt.dataset.netcdf`), checks of output paths (:mod:`~orbatt.dataset.paths`), the
 ``ds.orbatt`` accessor (:mod:`~orbatt.dataset.accessor`),
-quick plots (:mod:`~orbatt.dataset.plots`) and CCSDS AEM files (:mod:`~orbatt.dataset.aem`).
+quick plots (:mod:`~orbatt.dataset.plots`), the engineering figures chosen from a result's content
+(:mod:`~orbatt.dataset.figure_data`, :mod:`~orbatt.dataset.figures`) and their files
+(:mod:`~orbatt.dataset.figure_files`), and CCSDS AEM files (:mod:`~orbatt.dataset.aem`).
 
 Layout (``docs/design.md`` §6)
 ------------------------------

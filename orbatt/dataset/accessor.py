@@ -167,3 +167,18 @@ class OrbattAccessor:
         is conserved, and of the constraints, on log axes
         (:func:`orbatt.dataset.plots.plot_drift`). Returns the Figure."""
         return plots.plot_drift(self._ds, case=case, fig=fig, time=time)
+
+    def figures(self):
+        """The engineering figures this Dataset's content calls for, e.g. ``("pointing",
+        "rates", "wheels", "torques")`` (:func:`orbatt.dataset.figure_data.choose_figures`)."""
+        from .figure_data import choose_figures
+
+        return choose_figures(self._ds)
+
+    def plot_figure(self, figure, fig=None, time="auto"):
+        """Draw one engineering figure by name (``"pointing"``, ``"rates"``, ``"wheels"``,
+        ``"torques"``, ``"drift"``; :func:`orbatt.dataset.figures.draw`); an ensemble draws every
+        case. Returns the Figure."""
+        from .figures import draw
+
+        return draw(self._ds, figure, fig=fig, time=time)

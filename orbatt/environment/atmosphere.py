@@ -66,7 +66,8 @@ VALLADO_TABLE = np.array([[float(x) for x in row.split()] for row in """
 def _positive(value, unit, name, example, allow_plain=False):
     out = U.strip(value, unit, name, allow_plain=allow_plain)
     if out.shape != () or not out > 0.0:
-        raise InputError(f"{name}: {value!r} must be one positive {unit.physical_type}, e.g. '{example}'")
+        kind = U.dimension_phrase(unit).split(" ", 1)[1]
+        raise InputError(f"{name}: {value!r} must be one positive {kind}, e.g. '{example}'")
     return float(out)
 
 
@@ -200,7 +201,9 @@ class NRLMSIS:
         t = as_time_array(t, r.shape[0])
         lat, lon, alt = geodetic(t, r)
         n = r.shape[0]
-        dates = t.utc.to_value("datetime64")
+        # UTC calendar time from Unix seconds (a leap second 23:59:60 runs on continuously;
+        # astropy's datetime64 conversion refuses it)
+        dates = (np.asarray(t.utc.unix, dtype=np.float64) * 1e6).astype(np.int64).astype("datetime64[us]")
         out = calculate(dates, lon, lat, alt, np.full(n, self.f107), np.full(n, self.f107a),
                         np.full((n, 7), self.ap), version=2.1)
         return np.asarray(out[:, 0], dtype=np.float64)

@@ -22,16 +22,21 @@ interpolated linearly in time between epochs as ``ppigrf`` does; reference radiu
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..epoch import parse_epoch
 from ..errors import InputError
 from .frames import as_time_array, as_vectors, gcrs_to_itrs, itrs_to_gcrs
 
-__all__ = ["GeomagneticField", "IGRFField", "DipoleField", "igrf_coefficients", "IGRF_REFERENCE_RADIUS"]
+__all__ = ["GeomagneticField", "IGRFField", "DipoleField", "igrf_coefficients", "check_igrf_instants",
+           "IGRF_REFERENCE_RADIUS", "IGRF_SPAN"]
 
 #: IGRF's reference radius (km), as in ``ppigrf``
 IGRF_REFERENCE_RADIUS = 6371.2
+#: the instants IGRF-14 covers (UTC dates), those of ppigrf's coefficient file
+IGRF_SPAN = ("1900-01-01", "2030-01-01")
 #: nT -> T
 NANOTESLA = 1e-9
 #: points per block of the series evaluation (bounds the memory of the design matrices)
@@ -62,12 +67,29 @@ def _table():
 def _unix_seconds(t, name):
     """UTC seconds since 1970 of astropy instants, checked against IGRF's span."""
     times = _table()[0]
-    # UTC calendar seconds (no leap seconds), as ppigrf's datetimes count them
-    s = np.atleast_1d(t.utc.to_value("datetime64")).astype("datetime64[ns]").astype(np.int64) / 1e9
+    # UTC calendar seconds (no leap seconds), as ppigrf's datetimes count them: astropy's
+    # Unix time, a float (a leap second 23:59:60 runs on continuously from 23:59:59; no
+    # datetime64[ns] overflow beyond 2262)
+    with warnings.catch_warnings():  # ERFA's "dubious year" far from today: refused below
+        warnings.simplefilter("ignore")
+        s = np.atleast_1d(np.asarray(t.utc.unix, dtype=np.float64))
     if np.any(s < times[0]) or np.any(s > times[-1]):
-        raise InputError(f"{name}: {t.utc.min().isot}..{t.utc.max().isot} is outside IGRF-14's span "
-                         "1900-01-01..2030-01-01; give instants inside it")
+        lo, hi = (_iso(x) for x in (s.min(), s.max()))
+        when = lo if lo == hi else f"{lo}..{hi}"
+        raise InputError(f"{name}: {when} is outside IGRF-14's span "
+                         f"{IGRF_SPAN[0]}..{IGRF_SPAN[1]}; give instants inside it")
     return s
+
+
+def check_igrf_instants(t, name="t"):
+    """Refuse (:class:`~orbatt.errors.InputError` naming ``name``) astropy instants ``t``
+    outside :data:`IGRF_SPAN`; without ERFA's warnings for dates far from today."""
+    _unix_seconds(as_time_array(t, name=name), name)
+
+
+def _iso(unix_seconds):
+    """ISO date and time (to the second) of Unix seconds, without ERFA's warnings."""
+    return str(np.datetime64(int(unix_seconds), "s"))
 
 
 def igrf_coefficients(t, name="t"):

@@ -48,7 +48,7 @@ DENSITY_STEP = 30.0
 
 class OrbitSamples(NamedTuple):
     """Samples of an orbit: ``t`` (s since the orbit's epoch, ``(N,)``), ``time`` (the same
-    instants as an astropy ``Time``), ``position`` (km) and ``velocity`` (km/s) in the
+    instants as an astropy ``Time``, None for an orbit without an epoch), ``position`` (km) and ``velocity`` (km/s) in the
     inertial frame ``S`` = GCRS, each ``(N, 3)``."""
 
     t: np.ndarray
@@ -70,7 +70,9 @@ def sample_along_orbit(orbit, t0, t1, step):
     Parameters
     ----------
     orbit : orbatt.orbits.OrbitProvider
-        A provider with an epoch (its inertial frame is then GCRS).
+        The orbit (its inertial frame is GCRS when it has an epoch). Without an epoch the
+        samples carry no dates (``time`` None): only the models that need none (the
+        exponential atmospheres: altitude over the sphere) can be evaluated on them.
     t0, t1 : float (s since the orbit's epoch) or time Quantity
         The span, ``t0 < t1``; inside ``orbit.time_span`` for a sampled orbit.
     step : float (s) or time Quantity
@@ -81,9 +83,6 @@ def sample_along_orbit(orbit, t0, t1, step):
     OrbitSamples
     """
     t0, t1, step = _seconds(t0, "t0"), _seconds(t1, "t1"), _seconds(step, "step")
-    if orbit.epoch is None:
-        raise InputError("orbit: the environment needs an epoch; give the orbit an epoch "
-                         "(e.g. epoch = '2024-03-20T00:00:00Z')")
     if not t1 > t0:
         raise InputError(f"t1: {t1} s must be after t0 = {t0} s")
     if not step > 0.0:
@@ -95,7 +94,7 @@ def sample_along_orbit(orbit, t0, t1, step):
     n = max(int(math.ceil((t1 - t0) / step - 1e-9)), 1)
     t = np.linspace(t0, t1, n + 1)
     pos, vel = orbit.state(t)
-    return OrbitSamples(t, orbit.epoch + t * u.s, np.asarray(pos, dtype=np.float64),
+    return OrbitSamples(t, None if orbit.epoch is None else orbit.epoch + t * u.s, np.asarray(pos, dtype=np.float64),
                         np.asarray(vel, dtype=np.float64))
 
 

@@ -8,6 +8,7 @@ Every builder takes a :class:`~orbatt.scenario.fields.FieldContext` and reports 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from astropy import units as u
@@ -23,15 +24,16 @@ from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
 from ..torques import EnvironmentTorques, sample_margin
 from ..orbital import state_from_orbital
+from .work import torque_rates
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
            "build_potential",
            "build_environment_torques", "build_control", "build_initial_state",
-           "build_output_times", "check_work", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
+           "build_output_times", "check_work", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
-#: time (2e7 outputs: 7.2 GB, and the run needs working copies of it)
-MAX_OUTPUTS = 20_000_000
+#: time and the run needs working copies of it (2e6 outputs: 0.7 GB; a day every 0.05 s)
+MAX_OUTPUTS = 2_000_000
 #: most integration steps a scenario may need by the lower estimate of :func:`check_work`
 #: (the default ``max_steps`` of :func:`orbatt.propagate`: a run needing more would stop
 #: there after many minutes)
@@ -39,6 +41,9 @@ MAX_WORK_STEPS = DEFAULT_MAX_STEPS
 #: most angle (rad) one step of any method covers, for :func:`check_work`'s lower estimate
 #: (DOP853 at rtol 1e-3 takes about 1 rad per step of a rotation; at 1e-12, 0.1 rad)
 MAX_ANGLE_PER_STEP = math.pi
+#: smallest moment of inertia (kg m^2) blamed before the torque acting on it when the two make
+#: a run too stiff: a body lighter than a 1 g, 3 cm chip
+TINY_INERTIA = 1e-7
 
 
 def build_kepler_orbit(ctx, o):
@@ -107,6 +112,31 @@ def environment_margin(spec):
                          magnetic=(tq is not None and tq["residual_dipole"] is not None)
                          or (c is not None and c["magnetic_field"] is not None),
                          sun=getattr(law, "target", None) == "sun")
+
+
+def check_field_span(ctx, spec, t_end):
+    """Refuse, naming ``[integration] t_end``, a run whose IGRF field (``magnetic_field =
+    "igrf"`` of ``[torques]`` or of a B-dot ``[control]``) would be sampled past IGRF-14's span
+    (:data:`orbatt.environment.magnetic.IGRF_SPAN`): the epoch is checked when the file is read,
+    the end of the run (with the tables' margin, :func:`environment_margin`) here, before
+    anything is sampled."""
+    fields = [] if spec.torques is None else [spec.torques["environment"]["magnetic_field"]]
+    fields += [] if spec.control is None else [spec.control["magnetic_field"]]
+    epoch = None if spec.orbit is None else spec.orbit.get("epoch")
+    if "igrf" not in fields or epoch is None:
+        return
+    from astropy.time import TimeDelta
+
+    from ..environment.magnetic import check_igrf_instants
+
+    margin = environment_margin(spec)
+    try:
+        with warnings.catch_warnings():  # ERFA's "dubious year" past the leap-second table
+            warnings.simplefilter("ignore")
+            check_igrf_instants(epoch + TimeDelta([-margin, t_end + margin], format="sec"), "[integration] t_end")
+    except InputError as exc:
+        raise ctx.error("[integration] t_end", f"{t_end:.6g} s from the epoch: the IGRF field would be sampled "
+                                               f"over {str(exc).split(': ', 1)[-1]}; shorten the run") from None
 
 
 def build_output_times(ctx, integration, period):
@@ -214,27 +244,59 @@ def build_initial_state(ctx, spec, body, orbit):
         raise ctx.error("[initial]", str(exc)) from None
 
 
-def check_work(ctx, t_end, period, state0=None):
+def estimate_steps(t_end, period, state0=None, spec=None, step=None):
+    """:func:`check_work`'s lower estimate of the integration steps of one run (a float)."""
+    if step is not None:
+        return t_end / step
+    orbit = 4 * math.pi * t_end / period if period else 0.0
+    torque = 0.0 if spec is None else sum(r for r, _, _ in torque_rates(spec)) * t_end
+    spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
+    return (spin + orbit + torque) / MAX_ANGLE_PER_STEP
+
+
+def check_work(ctx, t_end, period, state0=None, spec=None, step=None):
     """Refuse a run that cannot end in reasonable time, before it starts.
 
     A lower estimate of the steps any method needs: the body turns by ``|omega0| t_end``
-    (``omega0`` the initial body rate of ``state0``, if given) and the gravity-gradient potential, which depends on
-    twice the orbital angle, by ``2 (2 pi) t_end / period``; no method covers more than
-    :data:`MAX_ANGLE_PER_STEP` per step. Above :data:`MAX_WORK_STEPS` the error names the key
-    that dominates (``[initial]`` rates or ``[orbit] a``) and ``t_end``.
+    (``omega0`` the initial body rate of ``state0``, if given) and the gravity-gradient
+    potential, which depends on twice the orbital angle, by ``2 (2 pi) t_end / period``; the
+    torques and control laws of ``spec`` (if given) turn it at their own rates
+    (:func:`orbatt.scenario.work.torque_rates`: ``sqrt(tau / I)``, ``sqrt(kp / I)``, ``kd /
+    I``, ...); no method covers more than :data:`MAX_ANGLE_PER_STEP` per step. A fixed
+    ``step`` (s) needs ``t_end / step`` steps. Above :data:`MAX_WORK_STEPS` the error names the
+    key that dominates (``[initial]`` rates, ``[orbit] a``, the torque's or the law's key,
+    ``[integration] step``) and ``t_end``.
     """
+    if step is not None and not t_end / step <= MAX_WORK_STEPS:
+        raise ctx.error("[integration] step", f"{step:.6g} over t_end = {t_end:.6g} is {t_end / step:.3g} steps, more "
+                                              f"than {MAX_WORK_STEPS:.0e} (hours of computing); give a longer step or "
+                                              "shorten t_end")
     orbit = 4 * math.pi * t_end / period if period else 0.0
-    if _spin_bound(state0) * t_end + orbit <= MAX_WORK_STEPS * MAX_ANGLE_PER_STEP * (1.0 - 1e-9):
+    rates = [] if spec is None else torque_rates(spec)
+    torque = sum(r for r, _, _ in rates) * t_end
+    if _spin_bound(state0) * t_end + orbit + torque <= MAX_WORK_STEPS * MAX_ANGLE_PER_STEP * (1.0 - 1e-9):
         return  # far enough below the limit by an upper bound of the spin (no need of omega)
     spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
-    steps = (spin + orbit) / MAX_ANGLE_PER_STEP
-    if not steps <= MAX_WORK_STEPS:  # NaN included
-        where = "[initial]" if spin >= orbit else "[orbit] a"
-        what = (f"the body turns {spin:.3g} rad" if spin >= orbit
-                else f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times")
-        fix = "lower the rates (omega, Q)" if spin >= orbit else "raise a"
-        raise ctx.error(where, f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps, more than "
-                               f"{MAX_WORK_STEPS:.0e} (hours of computing); {fix} or shorten [integration] t_end")
+    steps = (spin + orbit + torque) / MAX_ANGLE_PER_STEP
+    if steps <= MAX_WORK_STEPS:
+        return
+    top = max(rates, default=(0.0, "", ""))
+    if top[0] * t_end >= max(spin, orbit) or not math.isfinite(steps):
+        rate, key, what = top
+        if math.isfinite(rate):
+            tiny = float(np.min(spec.inertia)) * 1e6 < TINY_INERTIA
+            where = "[body] inertia" if tiny else key
+            what = f"{what} ({key})" if tiny else what
+            raise ctx.error(where, f"{what} sets a time scale of {1.0 / rate:.3g} s: at least {steps:.3g} integration steps "
+                                   f"over t_end = {t_end:.6g} s, more than {MAX_WORK_STEPS:.0e} (hours of computing, "
+                                   "a stiff problem); give a physical value (or raise [body] inertia, shorten "
+                                   "[integration] t_end)")
+    where = "[initial]" if spin >= orbit else "[orbit] a"
+    what = (f"the body turns {spin:.3g} rad" if spin >= orbit
+            else f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times")
+    fix = "lower the rates (omega, Q)" if spin >= orbit else "raise a"
+    raise ctx.error(where, f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps, more than "
+                           f"{MAX_WORK_STEPS:.0e} (hours of computing); {fix} or shorten [integration] t_end")
 
 
 def _spin_bound(state0):

@@ -34,6 +34,8 @@ from ..control import BDotControl, PDControl, ReactionWheel, wheel_axes_span
 from ..errors import InputError
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
+from .ranges import RANGES
+from .torques_schema import check_field_epoch
 
 __all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "LAWS", "parse_control"]
 
@@ -46,15 +48,15 @@ BDOT_KEYS = {"law", "gain", "max_dipole"}
 RATE = u.rad / u.s
 
 
-def _nonnegative(ctx, where, raw, unit):
-    v = parse_quantity(ctx, where, raw, unit, dimensionless=False)
+def _nonnegative(ctx, where, raw, unit, key):
+    v = parse_quantity(ctx, where, raw, unit, dimensionless=False, bounds=RANGES[key])
     if v < 0:
         raise ctx.error(where, f"{raw!r} must not be negative")
     return v
 
 
-def _positive(ctx, where, raw, unit):
-    v = parse_quantity(ctx, where, raw, unit, dimensionless=False)
+def _positive(ctx, where, raw, unit, key):
+    v = parse_quantity(ctx, where, raw, unit, dimensionless=False, bounds=RANGES[key])
     if not v > 0:
         raise ctx.error(where, f"{raw!r} must be positive")
     return v
@@ -73,10 +75,13 @@ def _wheels(ctx, raw):
             if key not in w:
                 raise ctx.error(f"{where} {key}", "missing; a wheel needs axis and inertia")
         axis = parse_plain_vector(ctx, f"{where} axis", w["axis"], 3)
-        inertia = _positive(ctx, f"{where} inertia", w["inertia"], u.kg * u.m**2)
-        speed = parse_quantity(ctx, f"{where} speed", w["speed"], RATE, dimensionless=False) if "speed" in w else 0.0
-        tmax = _positive(ctx, f"{where} max_torque", w["max_torque"], u.N * u.m) if "max_torque" in w else None
-        smax = _positive(ctx, f"{where} max_speed", w["max_speed"], RATE) if "max_speed" in w else None
+        inertia = _positive(ctx, f"{where} inertia", w["inertia"], u.kg * u.m**2, ("body.wheels", "inertia"))
+        speed = (parse_quantity(ctx, f"{where} speed", w["speed"], RATE, dimensionless=False,
+                                bounds=RANGES["body.wheels", "speed"]) if "speed" in w else 0.0)
+        tmax = (_positive(ctx, f"{where} max_torque", w["max_torque"], u.N * u.m, ("body.wheels", "max_torque"))
+                if "max_torque" in w else None)
+        smax = (_positive(ctx, f"{where} max_speed", w["max_speed"], RATE, ("body.wheels", "max_speed"))
+                if "max_speed" in w else None)
         if smax is not None and abs(speed) > smax:
             raise ctx.error(f"{where} speed", f"{w['speed']!r} is above max_speed = {w['max_speed']!r}; lower the "
                                               "speed or raise max_speed")
@@ -132,8 +137,8 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
         for key in ("gain", "max_dipole"):
             if key not in c:
                 raise ctx.error(f"[control] {key}", "missing; B-dot needs gain and max_dipole")
-        gain = _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T)
-        mmax = _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2)
+        gain = _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T, ("control", "gain"))
+        mmax = _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2, ("control", "max_dipole"))
         env = data.get("environment", {})
         field = env.get("magnetic_field") if isinstance(env, dict) else None
         if field is None or field == "none":
@@ -142,6 +147,7 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
         field = parse_choice(ctx, "[environment] magnetic_field", field, ("igrf", "dipole"))
         if epoch is None:
             raise ctx.error("[orbit] epoch", f"missing; the {field} field of B-dot needs the date (give [orbit] epoch)")
+        check_field_epoch(ctx, field, epoch)
         out["control"] = BDotControl(gain * u.A * u.m**2 * u.s / u.T, mmax * u.A * u.m**2)
         out["magnetic_field"] = field
         return out
@@ -150,11 +156,12 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
             raise ctx.error(f"[control] {key}", "missing; the PD law needs kp and kd")
     target = parse_choice(ctx, "[control] target", c.get("target", "orbital"), ("orbital", "inertial", "sun"))
     actuator = parse_choice(ctx, "[control] actuator", c.get("actuator", "ideal"), ("ideal", "wheels"))
-    kw = {"kp": _nonnegative(ctx, "[control] kp", c["kp"], u.N * u.m) * u.N * u.m,
-          "kd": _nonnegative(ctx, "[control] kd", c["kd"], u.N * u.m * u.s) * u.N * u.m * u.s,
+    kw = {"kp": _nonnegative(ctx, "[control] kp", c["kp"], u.N * u.m, ("control", "kp")) * u.N * u.m,
+          "kd": _nonnegative(ctx, "[control] kd", c["kd"], u.N * u.m * u.s, ("control", "kd")) * u.N * u.m * u.s,
           "actuator": actuator}
     if "max_torque" in c:
-        kw["max_torque"] = _positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m) * u.N * u.m
+        kw["max_torque"] = _positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m,
+                                     ("control", "max_torque")) * u.N * u.m
     if target == "inertial" and "target_q" not in c:
         raise ctx.error("[control] target_q", "missing; target = 'inertial' needs the attitude target_q = [w, x, y, z]")
     if "target_q" in c:

@@ -17,9 +17,10 @@ from astropy import units as u
 
 from .. import units as U
 from ..errors import ScenarioError
+from .ranges import ANGLE_LIMIT, Range
 
 __all__ = ["FieldContext", "parse_quantity", "parse_vector", "parse_plain_vector", "parse_choice", "parse_int",
-           "parse_time"]
+           "parse_time", "check_integers", "INT64"]
 
 
 @dataclass
@@ -58,6 +59,9 @@ def _split_quantity(ctx, where, text, unit):
         parsed = u.Unit(unit_text)
     except ValueError:
         raise ctx.error(where, f"{unit_text!r} in {text!r} is not a unit; write e.g. {example()}") from None
+    if isinstance(parsed, u.FunctionUnitBase) or not isinstance(getattr(parsed, "scale", None), (int, float)):
+        raise ctx.error(where, f"{unit_text!r} in {text!r} is a logarithmic unit; give the value in a linear unit, "
+                               f"e.g. {example()}")
     if parsed.scale != 1 and not parsed.is_equivalent(U.DIMENSIONLESS):
         raise ctx.error(where, f"cannot parse {text!r} as one number and a unit; write e.g. {example()}")
     return number, parsed
@@ -65,7 +69,11 @@ def _split_quantity(ctx, where, text, unit):
 
 def _check_value(ctx, where, value, x, unit, bounds):
     """Finite, a magnitude float64 arithmetic handles, and inside ``bounds`` (``(low, high)``
-    in ``unit``, either may be None; inclusive)."""
+    in ``unit``, either may be None; inclusive; or a :class:`~orbatt.scenario.ranges.Range`,
+    whose text the message quotes)."""
+    shown = None
+    if isinstance(bounds, Range):
+        shown, bounds = bounds, bounds.bounds(unit)
     if not math.isfinite(x):
         raise ctx.error(where, f"{value!r} is not finite; give a finite value")
     if x != 0 and not MAGNITUDE[0] <= abs(x) <= MAGNITUDE[1]:
@@ -76,6 +84,10 @@ def _check_value(ctx, where, value, x, unit, bounds):
         if lo is not None and lo > 0 and x <= 0:
             raise ctx.error(where, f"{value!r} must be positive")
         if (lo is not None and x < lo) or (hi is not None and x > hi):
+            if shown is not None:
+                have = x * float((1.0 * unit).to_value(u.Unit(shown.unit))) if shown.unit else x
+                raise ctx.error(where, f"{value!r} is {have:.6g}{' ' + shown.unit if shown.unit else ''}, outside "
+                                       f"the physical range {shown.text()} of this key; give a value inside it")
             rng = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None
                    else f">= {lo:g}" if lo is not None else f"<= {hi:g}")
             raise ctx.error(where, f"{value!r} is {x:.6g} {_unit_name(unit)}, outside the range {rng} "
@@ -120,6 +132,8 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise ctx.error(where, f"{value!r} is not a number or a quantity string")
+    if bounds is None and _equal(unit, U.ANGLE):
+        bounds = (-ANGLE_LIMIT, ANGLE_LIMIT)
     if isinstance(value, str):
         key = (value, unit, dimensionless, u.get_current_unit_registry())
         x = _PARSED.get(key)
@@ -128,7 +142,7 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
             if len(_PARSED) < 4096:
                 _PARSED[key] = x
         return _check_value(ctx, where, value, x, unit, bounds)
-    x = float(value)
+    x = _float(ctx, where, value)
     angle = _equal(unit, U.ANGLE)
     if angle and x != 0:
         raise ctx.error(where, f"{value!r} has no unit; an angle needs an angle unit: write '{value} deg' or "
@@ -137,6 +151,15 @@ def parse_quantity(ctx, where, value, unit, *, dimensionless, bounds=None):
         raise ctx.error(where, f"{value!r} has no unit; write it as a quantity string such as "
                                f"'{value} {unit.to_string()}'")
     return _check_value(ctx, where, value, x, unit, bounds)
+
+
+def _float(ctx, where, value):
+    """``float(value)`` of a TOML number; an integer too large for a float is refused by name."""
+    try:
+        return float(value)
+    except OverflowError:
+        raise ctx.error(where, f"an integer of {int(abs(value).bit_length() * 0.30103) + 1} digits is too large "
+                               "for a float; give a physical value") from None
 
 
 #: ``(unit, other) -> unit == other``: astropy's comparison of two units (~20 us: it converts
@@ -178,7 +201,7 @@ def _parse_quantity_string(ctx, where, value, unit, dimensionless):
     try:
         return float((number * qunit).to_value(unit))
     except u.UnitConversionError:
-        raise ctx.error(where, f"{value!r} has the wrong dimension; expected a {unit.physical_type} such "
+        raise ctx.error(where, f"{value!r} has the wrong dimension; expected {U.dimension_phrase(unit)} such "
                                f"as '1 {unit.to_string()}'") from None
 
 
@@ -196,7 +219,7 @@ def parse_plain_vector(ctx, where, value, n):
     if not isinstance(value, list) or len(value) != n or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
         raise ctx.error(where, f"expected a list of {n} plain numbers, got {value!r}")
-    a = np.array(value, dtype=float)
+    a = np.array([_float(ctx, f"{where}[{k}]", v) for k, v in enumerate(value)])
     if not np.all(np.isfinite(a)):
         raise ctx.error(where, f"{value!r} contains non-finite numbers")
     big = np.abs(a) > MAGNITUDE[1]
@@ -240,3 +263,28 @@ def parse_time(ctx, where, value, dimensionless, orbit, *, bounds=None):
     if t <= 0:
         raise ctx.error(where, f"{value!r} must be positive")
     return ("time", t)
+
+
+#: the integers TOML holds (64-bit signed, TOML 1.0 "Integer"); tomllib reads any size
+INT64 = (-2**63, 2**63 - 1)
+
+
+def check_integers(ctx, data, where=""):
+    """Refuse, naming the key, any integer of the TOML ``data`` (a table, nested tables and
+    arrays) outside TOML's 64-bit range: such a number is no valid TOML, and converting it to
+    a float overflows."""
+    if isinstance(data, dict):
+        for k, v in data.items():
+            if isinstance(v, dict):
+                check_integers(ctx, v, f"[{k}]" if not where else f"[{where.strip('[]')}.{k}]")
+            elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+                for i, x in enumerate(v):
+                    check_integers(ctx, x, f"[[{where.strip('[]') + '.' if where else ''}{k}]] {i + 1}")
+            else:
+                check_integers(ctx, v, f"{where} {k}".strip())
+    elif isinstance(data, list):
+        for i, x in enumerate(data):
+            check_integers(ctx, x, f"{where}[{i}]")
+    elif isinstance(data, int) and not isinstance(data, bool) and not INT64[0] <= data <= INT64[1]:
+        raise ctx.error(where, f"an integer of {int(abs(data).bit_length() * 0.30103) + 1} digits is outside TOML's "
+                               "64-bit integer range (and too large for a float); give a physical value")

@@ -2,6 +2,7 @@
 :func:`load_scenario` from a file or a shipped name, :func:`shipped_scenarios`."""
 from __future__ import annotations
 
+import contextlib
 import copy
 import threading
 import warnings
@@ -13,11 +14,14 @@ from astropy import units as u
 
 from .. import units as U
 from ..body import RigidBody
+from ..environment.frames import one_dates_warning
 from ..errors import InputError, IntegrationError, ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
-                    build_rebound_orbit, build_tle_orbit, check_work, environment_margin, tle_period)
+                    build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin,
+                    estimate_steps, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
+from .binary_schema import BinarySpec
 from ..dataset.build import dataset_content
 from ..dataset.content import Content
 from ..propagation import propagate
@@ -50,6 +54,13 @@ class Scenario:
         ``rtol``, ``atol``, ``step`` as given (step in the time unit).
     """
 
+    def __new__(cls, spec=None, path=None):
+        if isinstance(spec, BinarySpec):  # [orbit] provider = "coupled": scenario/binary_scenario.py
+            from .binary_scenario import BinaryScenario  # (imported for binaries only)
+
+            return BinaryScenario(spec, path=path)
+        return super().__new__(cls)
+
     def __init__(self, spec: Spec, path=None):
         self.spec = spec
         self.path = path
@@ -69,7 +80,8 @@ class Scenario:
             kepler = build_kepler_orbit(ctx, spec.orbit)
             period = kepler.period_value
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
-        check_work(ctx, self.t_end, period)  # the orbit alone, before REBOUND samples it
+        check_work(ctx, self.t_end, period, spec=spec)  # the orbit and the torques, before anything is sampled
+        check_field_span(ctx, spec, float(self.times[-1]))
         if provider == "tle":
             self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]), environment_margin(spec))
         elif spec.orbit is not None:
@@ -77,13 +89,15 @@ class Scenario:
                           else build_rebound_orbit(ctx, spec.orbit, kepler, float(self.times[-1])))
         self.potential = build_potential(spec, self.orbit, float(self.times[-1]))
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
-        check_work(ctx, self.t_end, period, self.state0)
         self.method = spec.integration["method"]
         self.settings = {k: spec.integration[k] for k in ("rtol", "atol", "independent_variable")
                          if k in spec.integration}
         if "step" in spec.integration:
             kind, value = spec.integration["step"]
             self.settings["step"] = value * period if kind == "orbits" else value
+        check_work(ctx, self.t_end, period, self.state0, spec, self.settings.get("step"))
+        #: check_work's lower estimate of the integration steps (a sweep multiplies it by its cases)
+        self.work_steps = estimate_steps(self.t_end, period, self.state0, spec, self.settings.get("step"))
 
     def run(self, method=None, progress=False, **overrides):
         """Propagate and return the result :class:`xarray.Dataset` (see :mod:`orbatt.dataset`).
@@ -116,15 +130,23 @@ class Scenario:
         kw = dict(self.settings)
         kw.update(overrides)
         m = method or self.method
-        try:
-            traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
-        except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
-            raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
-        except IntegrationError as exc:
-            partial = getattr(exc, "trajectory", None)
-            exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
-            raise
-        return self._content(traj)
+        epoch = None if self.orbit is None else self.orbit.epoch
+        if epoch is not None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                epoch = f"the run from {epoch.utc.isot} (+ {self.t_end:g} s)"
+        # ERFA's and astropy's warnings for dates beyond their tables (tens of lines from the
+        # environment's tables and the outputs) come out as one
+        with one_dates_warning(epoch) if epoch is not None else contextlib.nullcontext():
+            try:
+                traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
+            except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
+                raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
+            except IntegrationError as exc:
+                partial = getattr(exc, "trajectory", None)
+                exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
+                raise
+            return self._content(traj)
 
     def _content(self, traj):
         epoch = self.orbit.epoch if self.orbit is not None else None

@@ -11,6 +11,7 @@ from __future__ import annotations
 from .schema import KEY_DOCS, REQUIRED_TABLES, TABLES, TOP_KEYS
 from .sweep_schema import PARAMETERS, SWEEP_KEY_DOCS, SWEEP_KEYS
 from .control_schema import WHEEL_KEYS
+from .ranges import range_text
 from .torques_schema import FACET_KEYS
 
 __all__ = ["markdown", "undocumented_keys"]
@@ -21,8 +22,17 @@ HEADER = """# Scenario files: the reference
 
 A scenario is a TOML file: `orbatt run FILE` runs it, `orbatt.load_scenario(FILE)` loads it.
 Unknown tables and keys are refused. Quantities are strings astropy parses (`"7000 km"`,
-`"30 deg"`, `"0.001 rad / s"`, `"400 kg m^2"`); angles may also be plain numbers (radians).
-Durations may be `"N orbits"` where there is an orbit.
+`"30 deg"`, `"0.001 rad / s"`, `"400 kg m^2"`, `"1000 rpm"`); linear units only (`dex`, `dB`
+and `mag` are refused). **Angles always carry an angle unit** (`"45 deg"`, `"0.8 rad"`; a plain
+`45` is refused, a plain `0` accepted), in normalized units too. Durations may be `"N orbits"`
+where there is an orbit. Integers are TOML's 64-bit ones.
+
+**Ranges.** Every numeric key has a physical range (the `range` column; dimensional ranges
+apply to dimensional scenarios): a value outside describes no satellite and is refused naming
+the key. Before a run, the work is estimated from the rates, the orbit and the time scales of
+the torques and control laws (`sqrt(torque / I)`, `sqrt(kp / I)`, `kd / I`, ...): a run needing
+more than 1e8 integration steps, or more than 2e6 output times, is refused naming the key that
+dominates.
 
 **Normalized units.** A scenario written in plain numbers throughout (`inertia`, `omega`,
 `gm`, `a`, `t_end`, `output_step`, ...) is dimensionless, as in the spin-orbit literature:
@@ -38,10 +48,15 @@ def _escape(text):
     return str(text).replace("|", "\\|")
 
 
-def _table(rows):
-    out = ["| key | dimension | default | meaning |", "|---|---|---|---|"]
-    out += [f"| `{k}` | {_escape(d)} | {_escape(df)} | {_escape(m)} |" for k, (d, df, m) in rows]
-    return out
+def _table(rows, table=None):
+    """Markdown rows of ``(key, (dimension, default, meaning))``, with each key's range
+    (:func:`orbatt.scenario.ranges.range_text`) when ``table`` is given."""
+    if table is None:
+        out = ["| key | dimension | default | meaning |", "|---|---|---|---|"]
+        return out + [f"| `{k}` | {_escape(d)} | {_escape(df)} | {_escape(m)} |" for k, (d, df, m) in rows]
+    out = ["| key | dimension | range | default | meaning |", "|---|---|---|---|---|"]
+    return out + [f"| `{k}` | {_escape(d)} | {_escape(range_text(table, k, d))} | {_escape(df)} | {_escape(m)} |"
+                  for k, (d, df, m) in rows]
 
 
 def markdown() -> str:
@@ -52,13 +67,13 @@ def markdown() -> str:
         if table == "sweep":
             continue
         lines += [f"## `[{table}]`", ""]
-        lines += _table((k, KEY_DOCS[table][k]) for k in KEY_DOCS[table] if k in keys) + [""]
+        lines += _table(((k, KEY_DOCS[table][k]) for k in KEY_DOCS[table] if k in keys), table) + [""]
         if table == "body":
             lines += ["### `[[body.facets]]`", "", "One table per flat plate (environment torques).", ""]
-            lines += _table((k, KEY_DOCS["body.facets"][k]) for k in KEY_DOCS["body.facets"]) + [""]
+            lines += _table(((k, KEY_DOCS["body.facets"][k]) for k in KEY_DOCS["body.facets"]), "body.facets") + [""]
             lines += ["### `[[body.wheels]]`", "", "One table per reaction wheel (with `[control]`, or free "
                       "wheels).", ""]
-            lines += _table((k, KEY_DOCS["body.wheels"][k]) for k in KEY_DOCS["body.wheels"]) + [""]
+            lines += _table(((k, KEY_DOCS["body.wheels"][k]) for k in KEY_DOCS["body.wheels"]), "body.wheels") + [""]
     lines += ["## `[sweep]`", "", "Optional: many cases run by `orbatt sweep` (manual: `docs/sweeps.md`); "
               "`orbatt run` runs the nominal case.", ""]
     lines += _table((k, SWEEP_KEY_DOCS[k]) for k in SWEEP_KEYS) + [""]

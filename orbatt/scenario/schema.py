@@ -19,7 +19,8 @@ dimensional quantities is refused naming the first plain key)::
                   frame = "inertial" (default) | "orbital"
     [potential]   kind = "torque-free" | "heavy-top" | "gravity-gradient"
                   sign = "physical" (default) | "paper"        (heavy top)
-    [orbit]       provider = "kepler" | "rebound"; central_body = "earth" | gm = "..."
+    [orbit]       provider = "kepler" | "rebound" | "tle" | "coupled" (a binary asteroid: its own
+                  schema, :mod:`orbatt.scenario.binary_schema`); central_body = "earth" | gm = "..."
                   a, e, i, raan, argp, and one of true_anomaly | mean_anomaly
                   epoch (ISO UTC); rebound: perturbations = ["j2", "moon", "sun"], integrator
     [integration] method, rtol, atol | step, t_end, output_step, independent_variable
@@ -31,25 +32,18 @@ Quantity rules (:func:`orbatt.scenario.fields.parse_quantity`): a string is one 
 one unit, parsed whole (``"1 2 orbits"``, ``"0.01 planet orbits"`` are refused); the unit has
 the dimension of the key; **angles always carry an angle unit** (``"45 deg"``, ``"0.8 rad"``;
 ``"45"``, ``45`` and ``"98.2 deg deg"`` are refused; a plain ``0`` is accepted), in
-dimensionless scenarios too; every value is finite. Physical ranges (:data:`RANGES`, in the
-internal units km, s, kg, rad; dimensional scenarios)::
-
-    [body] inertia          1e-20 .. 1e45 kg km^2 per moment (1e-14 kg m^2 .. 1e45)
-    [orbit] a               1 m .. 1e12 km, and the apoapsis a (1 + e) above the central
-                            body's surface (central_body = "earth"; a periapsis below it
-                            only warns, as in the paper's Sect. 6.2 orbit)
-    [orbit] gm              1e-15 .. 1e12 km^3 s^-2 (the Sun: 1.3e11)
-    [initial] omega         |w_k| <= 1e4 rad/s (a 95,000 rpm spin)
-    [integration] t_end     <= 1e15 s (30 million years)
-    [integration] rtol      10 machine epsilons .. 0.1; atol 0 .. 1 (q has |q| = 1: an
-                            atol above 1 leaves the attitude uncontrolled)
-    any other number        zero, or a magnitude in [1e-100, 1e100]
+dimensionless scenarios too; every value is finite. Every numeric key has a physical range
+(:data:`orbatt.scenario.ranges.RANGES`, shown in ``docs/scenarios.md``; the ranges of
+dimensional quantities apply to dimensional scenarios); an ``[orbit] a`` whose apoapsis
+``a (1 + e)`` lies below the Earth's surface is refused (a periapsis below it only warns, as in
+the paper's Sect. 6.2 orbit).
 
 Work limits, checked before the run: at most :data:`~orbatt.scenario.build.MAX_OUTPUTS`
 output times (``t_end / output_step``), and at most
 :data:`~orbatt.scenario.build.MAX_WORK_STEPS` integration steps by a lower estimate (the
-body's rotation angle ``|omega| t_end`` and twice the orbital angle, at most pi rad per
-step): a run past them would take hours or fail at ``max_steps``.
+body's rotation angle ``|omega| t_end``, twice the orbital angle and the angles of the torques'
+and control laws' time scales, :mod:`orbatt.scenario.work`, at most pi rad per step; a fixed
+step's count): a run past them would take hours or fail at ``max_steps``.
 
 Outputs fall exactly on ``k * output_step`` for ``k = 0 .. floor(t_end / output_step)``.
 ``Q`` is in the unit implied by the inertia and time units (kg km^2 s^-1 for a dimensional
@@ -69,8 +63,10 @@ from ..body import RigidBody
 from ..errors import InputError
 from ..epoch import parse_epoch
 from .key_docs import parse_key_docs
-from .fields import FieldContext, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
+from .ranges import RANGES
+from .fields import FieldContext, check_integers, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 from .sweep_schema import SweepSpec, parse_sweep_table
+from .binary_schema import BinarySpec, is_binary, parse_binary
 from .control_schema import CONTROL_KEYS, parse_control
 from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
@@ -237,14 +233,6 @@ independent_variable  text       'auto'                          DOP853's variab
 # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
 """)
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
-#: physical range of a key in a dimensional scenario, internal units (km, s, kg, rad), inclusive
-RANGES = {
-    "[body] inertia": (1e-20, 1e45),
-    "[orbit] a": (1e-3, 1e12),
-    "[orbit] gm": (1e-15, 1e12),
-    "[initial] omega": (-1e4, 1e4),
-    "[integration] t_end": (None, 1e15),
-}
 #: central body radii (km) below which an apoapsis is refused
 BODY_RADII = {"earth": R_EARTH}
 POTENTIAL_KINDS = ("torque-free", "heavy-top", "gravity-gradient")
@@ -293,8 +281,9 @@ class Spec:
     control: dict | None = None  # [control] and the wheels (control_schema.py)
 
 
-def parse(text: str, source: str = "<scenario>") -> Spec:
-    """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field."""
+def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
+    """Validate scenario TOML ``text``; raise :class:`ScenarioError` naming the field. A binary
+    asteroid (``[orbit] provider = "coupled"``) gives a :class:`~orbatt.scenario.binary_schema.BinarySpec`."""
     ctx = FieldContext(source)
     try:
         data = tomllib.loads(text)
@@ -303,6 +292,9 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
     except RecursionError:
         raise ctx.error("TOML", "arrays or tables nested too deeply to parse; scenario values are at most "
                                 "2 levels deep") from None
+    check_integers(ctx, data)
+    if is_binary(data):  # [orbit] provider = "coupled" or a [primary]: a binary asteroid
+        return parse_binary(ctx, data, text, source)
     _check_keys(ctx, data)
     body = data["body"]
     if "inertia" not in body:
@@ -312,7 +304,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
         raise ctx.error("[body] inertia", f"expected [I1, I2, I3], got {inertia_raw!r}")
     dimless = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in inertia_raw)
     inertia = parse_vector(ctx, "[body] inertia", inertia_raw, 3, U.INERTIA, dimensionless=dimless,
-                           bounds=None if dimless else RANGES["[body] inertia"])
+                           bounds=None if dimless else RANGES["body", "inertia"])
     try:  # the body's own validation (positive, triangle inequality), reported with the file
         RigidBody(inertia if dimless else inertia * U.INERTIA)
     except InputError as exc:
@@ -326,11 +318,13 @@ def parse(text: str, source: str = "<scenario>") -> Spec:
             if k not in body:
                 raise ctx.error(f"[body] {k}", "missing; the heavy top needs mass_g (M g) and center_of_mass")
         force = U.MASS * U.LENGTH / U.TIME**2
-        heavy["mass_g"] = parse_quantity(ctx, "[body] mass_g", body["mass_g"], force, dimensionless=dimless)
+        heavy["mass_g"] = parse_quantity(ctx, "[body] mass_g", body["mass_g"], force, dimensionless=dimless,
+                                         bounds=None if dimless else RANGES["body", "mass_g"])
         if heavy["mass_g"] < 0:
             raise ctx.error("[body] mass_g", f"{body['mass_g']!r} must be non-negative")
         heavy["center_of_mass"] = parse_vector(ctx, "[body] center_of_mass", body["center_of_mass"], 3, U.LENGTH,
-                                          dimensionless=dimless)
+                                               dimensionless=dimless,
+                                               bounds=None if dimless else RANGES["body", "center_of_mass"])
         heavy["sign"] = parse_choice(ctx, "[potential] sign", pot.get("sign", "physical"), ("physical", "paper"))
     else:
         for k in ("mass_g", "center_of_mass"):
@@ -408,14 +402,14 @@ def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
         raise ctx.error("[orbit] gm", "give either central_body or gm, not both")
     if "gm" in o:
         out["gm"] = parse_quantity(ctx, "[orbit] gm", o["gm"], U.GM, dimensionless=dimless,
-                                   bounds=RANGES["[orbit] gm"])
+                                   bounds=RANGES["orbit", "gm"])
         out["central_body"] = None
     else:
         out["central_body"] = parse_choice(ctx, "[orbit] central_body", o.get("central_body", "earth"), ("earth",))
     for k in ("a", "e", "i", "raan", "argp"):
         if k not in o:
             raise ctx.error(f"[orbit] {k}", "missing; the orbit needs a, e, i, raan, argp and an anomaly")
-    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=dimless, bounds=RANGES["[orbit] a"])
+    out["a"] = parse_quantity(ctx, "[orbit] a", o["a"], U.LENGTH, dimensionless=dimless, bounds=RANGES["orbit", "a"])
     out["e"] = parse_quantity(ctx, "[orbit] e", o["e"], U.DIMENSIONLESS, dimensionless=True)
     if not 0 <= out["e"] < 1:
         raise ctx.error("[orbit] e", f"{o['e']!r} is outside [0, 1): only elliptic orbits are supported")
@@ -435,8 +429,8 @@ def _parse_orbit(ctx, o, source="<scenario>", dimless=False):
     if "epoch" in o:
         try:  # the orbit providers' own parser: a string astropy parses, taken as UTC
             out["epoch"] = parse_epoch(str(o["epoch"]))
-        except InputError:
-            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
+        except InputError as exc:
+            raise ctx.error("[orbit] epoch", str(exc).split(": ", 1)[-1]) from None
     else:
         out["epoch"] = None
     if out["provider"] == "rebound":
@@ -486,8 +480,8 @@ def _parse_tle_orbit(ctx, o, source):
     if "epoch" in o:
         try:
             out["epoch"] = parse_epoch(str(o["epoch"]))
-        except InputError:
-            raise ctx.error("[orbit] epoch", f"{o['epoch']!r} is not an ISO UTC time such as '2026-03-20T00:00:00'") from None
+        except InputError as exc:
+            raise ctx.error("[orbit] epoch", str(exc).split(": ", 1)[-1]) from None
     return out
 
 
@@ -511,10 +505,11 @@ def _parse_initial(ctx, init, dimless):
         out["Q"] = parse_plain_vector(ctx, "[initial] Q", init["Q"], 4)
     if "omega" in has:
         out["omega"] = parse_vector(ctx, "[initial] omega", init["omega"], 3, U.RATE, dimensionless=dimless,
-                                    bounds=None if dimless else RANGES["[initial] omega"])
+                                    bounds=None if dimless else RANGES["initial", "omega"])
     if "euler_momenta" in has:
         out["euler_momenta"] = parse_vector(ctx, "[initial] euler_momenta", init["euler_momenta"], 3, U.MOMENTUM,
-                                       dimensionless=dimless)
+                                            dimensionless=dimless,
+                                            bounds=None if dimless else RANGES["initial", "euler_momenta"])
     return out
 
 
@@ -532,7 +527,8 @@ def _parse_integration(ctx, g, dimless, orbit):
                 raise ctx.error(f"[integration] {k}", f"{v!r} is above {hi:g}: {why}; give e.g. {k} = 1e-10")
             out[k] = float(v)
     if "step" in g:
-        out["step"] = parse_time(ctx, "[integration] step", g["step"], dimless, orbit)
+        out["step"] = parse_time(ctx, "[integration] step", g["step"], dimless, orbit,
+                                 bounds=None if dimless else RANGES["integration", "step"])
     if "independent_variable" in g:
         iv = parse_choice(ctx, "[integration] independent_variable", g["independent_variable"], INDEPENDENT_VARIABLES)
         provider = None if orbit is None else orbit["provider"]
@@ -546,5 +542,5 @@ def _parse_integration(ctx, g, dimless, orbit):
         if k not in g:
             raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")
         out[k] = parse_time(ctx, f"[integration] {k}", g[k], dimless, orbit,
-                            bounds=None if dimless else RANGES.get(f"[integration] {k}"))
+                            bounds=None if dimless else RANGES["integration", k])
     return out

@@ -18,12 +18,14 @@ from ..dataset import DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS
 from .paths import leaf_quantity, resolve, split_path
 from .study_schema import parse_study_keys
 from .fields import parse_int, parse_quantity
+from ..orbits import R_EARTH
 from .key_docs import parse_key_docs
+from .ranges import RANGES
 
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
            "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
            "parameter_unit", "parameter_units", "in_limits", "limits_text", "PATH_PARAMETER", "definition", "path_unit", "sweep_units",
-           "FIXED_TABLES"]
+           "FIXED_TABLES", "MAX_GRID_VALUES"]
 
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
@@ -65,6 +67,16 @@ DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
 DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "normal": ("mean", "std"), "truncnormal": ("mean", "std", "low", "high")}
 MAX_CASES = 100_000_000
+#: the physical range of each kind of parameter: that of the key it replaces
+#: (:data:`orbatt.scenario.ranges.RANGES`; angles are bounded by the field parser)
+KIND_RANGES = {"inertia": RANGES["body", "inertia"], "rate": RANGES["initial", "omega"],
+               "length": RANGES["orbit", "a"]}
+#: central body radii (km): a sweep's orbit whose apoapsis lies below is refused
+BODY_RADII = {"earth": R_EARTH}
+#: most values of one grid: a longer list takes minutes to read before any limit on the cases
+#: could refuse it (the cases of a sweep are bounded by its estimated work,
+#: :func:`orbatt.sweep.Sweep`)
+MAX_GRID_VALUES = 10_000
 
 
 @dataclass(frozen=True)
@@ -217,6 +229,7 @@ class SweepSpec:
     detumble_rate: float | None = None   # rad/s (or plain): detumble_time's threshold
     settling_angle: float | None = None  # rad: settling_time's threshold
     window: float | None = None          # s (or plain): pointing_error's window; None: the default
+    min_apoapsis: float | None = None  # km: a draw whose apoapsis a (1 + e) is lower is invalid (the Earth's radius)
 
     @property
     def grid(self) -> dict:
@@ -251,6 +264,28 @@ def limits_text(p: Parameter, unit_text):
     lb = "(" if p.low_open or math.isinf(p.low) else "["
     hb = ")" if p.high_open or math.isinf(p.high) else "]"
     return f"{lb}{lo}, {hi}{hb} {unit_text}".rstrip()
+
+
+def _check_apoapsis(ctx, params, orbit, radius):
+    """Refuse a grid value or a distribution bound of ``orbit_a`` whose orbit lies inside the
+    central body (apoapsis ``a (1 + e)`` below its ``radius`` km, with the smallest ``e`` the
+    sweep gives), as ``[orbit] a`` is refused."""
+    e = params.get("orbit_e")
+    e_min = (orbit["e"] if e is None else min(e.values) if not e.random
+             else e.low if e.low is not None else 0.0)
+    d = params.get("orbit_a")
+    if d is None:
+        return
+    where = "[sweep.parameters.orbit_a]"
+    if not d.random:
+        for k, a in enumerate(d.values):
+            if a * (1.0 + e_min) < radius:
+                raise ctx.error(f"{where} values[{k}]", f"{a:.6g} km with e = {e_min:g}: the whole orbit (apoapsis "
+                                                        f"{a * (1 + e_min):.6g} km) lies inside the central body "
+                                                        f"(radius {radius:.6g} km); raise a")
+    elif d.low is not None and d.low * (1.0 + e_min) < radius:
+        raise ctx.error(f"{where} low", f"{d.low:.6g} km with e = {e_min:g}: draws may put the whole orbit inside the "
+                                        f"central body (radius {radius:.6g} km); raise low")
 
 
 #: tables whose keys a sweep does not vary: the output times and the method are shared by all cases
@@ -366,8 +401,14 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
         cf = units[name]
 
-        def q(key, value, _where=where, _unit=unit, _dimless=dimless):
-            return parse_quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless)
+        # the physical range of the key the parameter replaces (dimensional scenarios; a std
+        # is a spread of the same quantity, bounded alike)
+        rng = None if dimensionless else KIND_RANGES.get(p.kind)
+        if rng is not None and p.low == 0.0:  # a positive kind: its own limit names a value <= 0 first
+            rng = (None, rng.bounds(unit)[1])
+
+        def q(key, value, _where=where, _unit=unit, _dimless=dimless, _rng=rng):
+            return parse_quantity(ctx, f"{_where} {key}", value, _unit, dimensionless=_dimless, bounds=_rng)
 
         d = raw[name]
         if not isinstance(d, dict):
@@ -380,6 +421,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             vals = d["values"]
             if not isinstance(vals, list) or not vals:
                 raise ctx.error(f"{where} values", f"expected a non-empty list, got {vals!r}")
+            if len(vals) > MAX_GRID_VALUES:
+                raise ctx.error(f"{where} values", f"a grid of {len(vals)} values is more than {MAX_GRID_VALUES}; "
+                                                   "give fewer values or a distribution with samples")
             v = tuple(q(f"values[{i}]", x) for i, x in enumerate(vals))
             bad = np.flatnonzero(~in_limits(p, v))
             if bad.size:
@@ -430,7 +474,10 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         params[name] = Distribution(kind, low=vals.get("low"), high=vals.get("high"), mean=vals.get("mean"),
                                     std=vals.get("std"))
 
-    spec = SweepSpec(parameters=params, paths=paths)
+    radius = None if orbit is None or dimensionless or "a" not in orbit else BODY_RADII.get(orbit["central_body"])
+    if radius is not None:  # a Keplerian or REBOUND orbit about the Earth: no orbit inside it
+        _check_apoapsis(ctx, params, orbit, radius)
+    spec = SweepSpec(parameters=params, paths=paths, min_apoapsis=radius)
     n_random = sum(d.random for d in params.values())
     if "samples" in table:
         spec.samples = parse_int(ctx, "[sweep] samples", table["samples"], 1)

@@ -41,8 +41,9 @@ from astropy import units as u
 from ..errors import InputError
 from ..torques import Facet
 from .fields import parse_choice, parse_quantity, parse_vector
+from .ranges import RANGES
 
-__all__ = ["FACET_KEYS", "TORQUE_KEYS", "ENVIRONMENT_KEYS", "parse_torques"]
+__all__ = ["FACET_KEYS", "TORQUE_KEYS", "ENVIRONMENT_KEYS", "parse_torques", "check_field_epoch"]
 
 FACET_KEYS = {"area", "normal", "position", "drag_coefficient", "specular", "diffuse"}
 TORQUE_KEYS = {"drag", "srp", "residual_dipole", "constant"}
@@ -53,16 +54,30 @@ FIELDS = ("igrf", "dipole", "none")
 SHADOWS = ("conical", "cylindrical", "none")
 
 
+def check_field_epoch(ctx, field, epoch):
+    """Refuse, naming ``[orbit] epoch``, an epoch outside IGRF-14's span 1900-2030 for the
+    ``field`` model (``"igrf"`` or ``"dipole"``: both read IGRF's coefficients), before any
+    frame transform warns about the year."""
+    from ..environment.magnetic import check_igrf_instants
+
+    try:
+        check_igrf_instants(epoch, "[orbit] epoch")
+    except InputError as exc:
+        raise ctx.error("[orbit] epoch", f"{str(exc).split(': ', 1)[-1]} (magnetic_field = {field!r})") from None
+
+
 def _bool(ctx, where, value):
     if not isinstance(value, bool):
         raise ctx.error(where, f"{value!r} is not true or false")
     return value
 
 
-def _number(ctx, where, value, lo, hi):
+def _number(ctx, where, value, table, key):
+    """A plain number inside the physical range of ``[table] key`` (:data:`RANGES`)."""
+    lo, hi = RANGES[table, key].bounds(u.one)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
             or not lo <= value <= hi:
-        raise ctx.error(where, f"{value!r} must be a number in [{lo}, {hi}]")
+        raise ctx.error(where, f"{value!r} must be a plain number in the physical range [{lo:g}, {hi:g}]")
     return float(value)
 
 
@@ -78,12 +93,14 @@ def _facets(ctx, raw):
         for key in ("area", "normal", "position"):
             if key not in f:
                 raise ctx.error(f"{where} {key}", "missing; a facet needs area, normal and position")
-        area = parse_quantity(ctx, f"{where} area", f["area"], u.m**2, dimensionless=False)
+        area = parse_quantity(ctx, f"{where} area", f["area"], u.m**2, dimensionless=False,
+                              bounds=RANGES["body.facets", "area"])
         normal = parse_vector(ctx, f"{where} normal", f["normal"], 3, u.one, dimensionless=True)
-        pos = parse_vector(ctx, f"{where} position", f["position"], 3, u.m, dimensionless=False)
-        cd = _number(ctx, f"{where} drag_coefficient", f.get("drag_coefficient", 2.2), 0.0, 1e3)
-        cs = _number(ctx, f"{where} specular", f.get("specular", 0.0), 0.0, 1.0)
-        cdf = _number(ctx, f"{where} diffuse", f.get("diffuse", 0.0), 0.0, 1.0)
+        pos = parse_vector(ctx, f"{where} position", f["position"], 3, u.m, dimensionless=False,
+                           bounds=RANGES["body.facets", "position"])
+        cd = _number(ctx, f"{where} drag_coefficient", f.get("drag_coefficient", 2.2), "body.facets", "drag_coefficient")
+        cs = _number(ctx, f"{where} specular", f.get("specular", 0.0), "body.facets", "specular")
+        cdf = _number(ctx, f"{where} diffuse", f.get("diffuse", 0.0), "body.facets", "diffuse")
         try:
             out.append(Facet(area * u.m**2, normal, pos * u.m, cd, cs, cdf, name=where))
         except InputError as exc:
@@ -127,16 +144,20 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
                                      f"[orbit] (this scenario is {potential_kind!r}); only 'constant' needs none")
     constant = None
     if "constant" in tq:
-        constant = parse_vector(ctx, "[torques] constant", tq["constant"], 3, u.N * u.m, dimensionless=False)
+        constant = parse_vector(ctx, "[torques] constant", tq["constant"], 3, u.N * u.m, dimensionless=False,
+                                bounds=RANGES["torques", "constant"])
     drag = _bool(ctx, "[torques] drag", tq.get("drag", False))
     srp = _bool(ctx, "[torques] srp", tq.get("srp", False))
     dipole = None
     if "residual_dipole" in tq:
         dipole = parse_vector(ctx, "[torques] residual_dipole", tq["residual_dipole"], 3, u.A * u.m**2,
-                              dimensionless=False)
+                              dimensionless=False, bounds=RANGES["torques", "residual_dipole"])
     for name, on in (("drag", drag), ("srp", srp)):
         if on and not facets:
             raise ctx.error(f"[torques] {name}", "needs the body's flat plates: add [[body.facets]] tables")
+    if facets and not (drag or srp):
+        raise ctx.error("[[body.facets]]", "only read by [torques] drag or srp, both false here; set drag = true or "
+                                           "srp = true, or remove the facets")
     epoch = None if orbit is None else orbit.get("epoch")
     atmosphere = parse_choice(ctx, "[environment] atmosphere", env.get("atmosphere", "exponential" if drag else "none"),
                               ATMOSPHERES)
@@ -153,12 +174,9 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
             missing = sorted({"density0", "altitude0", "scale_height"} - set(exp_keys))
             raise ctx.error(f"[environment] {missing[0]}", "missing; give density0, altitude0 and scale_height "
                                                            "together (or none: Vallado's table)")
-        out_env["density0"] = parse_quantity(ctx, "[environment] density0", env["density0"], u.kg / u.m**3,
-                                             dimensionless=False)
-        out_env["altitude0"] = parse_quantity(ctx, "[environment] altitude0", env["altitude0"], u.km,
-                                              dimensionless=False)
-        out_env["scale_height"] = parse_quantity(ctx, "[environment] scale_height", env["scale_height"], u.km,
-                                                 dimensionless=False)
+        for k, unit in (("density0", u.kg / u.m**3), ("altitude0", u.km), ("scale_height", u.km)):
+            out_env[k] = parse_quantity(ctx, f"[environment] {k}", env[k], unit, dimensionless=False,
+                                        bounds=RANGES["environment", k])
         for k in ("density0", "scale_height"):
             if not out_env[k] > 0:
                 raise ctx.error(f"[environment] {k}", f"{env[k]!r} must be positive")
@@ -170,7 +188,7 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
             if k not in env:
                 raise ctx.error(f"[environment] {k}", "missing; NRLMSIS needs the space weather f107, f107a and ap "
                                                       "(it is never downloaded)")
-            out_env[k] = _number(ctx, f"[environment] {k}", env[k], 0.0, 1000.0)
+            out_env[k] = _number(ctx, f"[environment] {k}", env[k], "environment", k)
         if epoch is None:
             raise ctx.error("[orbit] epoch", "missing; NRLMSIS needs the date (give [orbit] epoch)")
     field = parse_choice(ctx, "[environment] magnetic_field",
@@ -183,6 +201,8 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
                                                         "[control]")
     if field != "none" and epoch is None:
         raise ctx.error("[orbit] epoch", f"missing; the {field} field needs the date (give [orbit] epoch)")
+    if field != "none":
+        check_field_epoch(ctx, field, epoch)
     if srp and epoch is None:
         raise ctx.error("[orbit] epoch", "missing; SRP needs the date to place the Sun (give [orbit] epoch)")
     out_env["magnetic_field"] = field

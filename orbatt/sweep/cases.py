@@ -19,7 +19,13 @@ from ..scenario.sweep_schema import sweep_units
 from .chunk import compute_chunk
 from .sampling import SAMPLING_VERSION, draw_samples, nominal_values
 
-__all__ = ["Sweep", "load_sweep", "FORMAT"]
+__all__ = ["Sweep", "load_sweep", "check_sweep_work", "FORMAT", "MAX_SWEEP_WORK_STEPS", "MIN_CASE_STEPS"]
+
+#: most integration steps a sweep may need by the lower estimate (cases times the nominal
+#: case's steps): about an hour of a few cores at the compiled kernels' speed
+MAX_SWEEP_WORK_STEPS = 1e9
+#: the least work counted per case (its setup and outputs cost as much as ~100 steps)
+MIN_CASE_STEPS = 100.0
 
 #: format tag of a sweep's fingerprint and parts manifest
 FORMAT = "orbatt-sweep-1"
@@ -75,6 +81,7 @@ class Sweep:
         else:
             self.seed, self.seed_source = secrets.randbits(63), "default"
         self.cases = spec.cases
+        check_sweep_work(scenario, spec)
         self.nominal = nominal_values(scenario)
         dimless = scenario.spec.dimensionless
         self.units = sweep_units(spec, dimless)
@@ -161,6 +168,24 @@ class Sweep:
     def __repr__(self):
         return (f"Sweep({self.scenario.name!r}, cases={self.cases}, parameters={list(self.spec.parameters)}, "
                 f"seed={self.seed})")
+
+
+def check_sweep_work(scenario, spec):
+    """Refuse, naming ``[sweep] samples`` (or the grid), a sweep whose cases times the nominal
+    case's estimated steps (:attr:`orbatt.scenario.Scenario.work_steps`, at least
+    :data:`MIN_CASE_STEPS` a case) exceed :data:`MAX_SWEEP_WORK_STEPS`, before any sample is
+    drawn."""
+    per_case = getattr(scenario, "work_steps", None)  # None: a study without the estimate (a binary)
+    if per_case is None:
+        return
+    steps = spec.cases * max(per_case, MIN_CASE_STEPS)
+    if steps <= MAX_SWEEP_WORK_STEPS:
+        return
+    where = "[sweep] samples" if spec.random else f"[sweep.parameters.{next(iter(spec.grid))}] values"
+    raise ScenarioError(f"{scenario.path or scenario.name}: {where}: {spec.cases} cases of at least "
+                        f"{max(per_case, MIN_CASE_STEPS):.3g} integration steps each is {steps:.3g} steps, "
+                        f"more than {MAX_SWEEP_WORK_STEPS:.0e} (days of computing); run fewer cases or split the "
+                        "study")
 
 
 def _case_check(scenario, spec):

@@ -4,21 +4,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dataset.sweep_figures import sweep_outputs
+
 __all__ = ["PERCENTILES", "scalar_outputs", "percentile_table"]
 
 #: the percentiles ``orbatt info`` prints (0 and 100: min and max)
 PERCENTILES = (0, 50, 95, 99, 100)
 #: display units for the Dataset's units (a factor and a label)
 _DISPLAY = {"rad": (np.degrees(1.0), "deg"), "rad s^-1": (np.degrees(1.0), "deg/s")}
-#: flags and bookkeeping, not outputs to summarize
-_SKIP = {"integration_failed", "tumbling", "wheel_saturated"}
 
 
 def scalar_outputs(ds):
     """The names of the per-case scalar outputs of a sweep Dataset (float variables along
-    ``case`` only), in the Dataset's order."""
-    return [k for k, v in ds.data_vars.items()
-            if v.dims == ("case",) and v.dtype.kind == "f" and k not in _SKIP]
+    ``case`` only, flags left out), in the Dataset's order
+    (:func:`orbatt.dataset.sweep_figures.sweep_outputs`)."""
+    return sweep_outputs(ds)
 
 
 def percentile_table(ds) -> list[str]:

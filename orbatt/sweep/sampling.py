@@ -120,6 +120,17 @@ def draw_samples(spec: SweepSpec, seed, nominal, unit_text, check=None):
         for b in bad.values():
             any_bad |= b
         any_bad |= tri
+        if spec.min_apoapsis is not None and "orbit_a" in values:
+            e = values.get("orbit_e", np.full(n, nominal["orbit_e"]))
+            inside = values["orbit_a"] * (1.0 + e) < spec.min_apoapsis
+            if inside.any() and spec.on_invalid == "error":
+                case = int(np.flatnonzero(inside)[0])
+                raise InputError(f"[sweep.parameters] orbit_a: case {case} drew a = {values['orbit_a'][case]:.6g} km "
+                                 f"with e = {e[case]:.6g}: the whole orbit lies inside the Earth (radius "
+                                 f"{spec.min_apoapsis:.6g} km); narrow the distribution (truncnormal with low) or set "
+                                 "[sweep] on_invalid = \"resample\"")
+            bad["orbit_a"] = bad["orbit_a"] | inside
+            any_bad |= inside
         if not any_bad.any():
             break
         fixable = {k for k, d in spec.random.items() if bad[k].any()}

@@ -116,3 +116,270 @@ def test_log_axes_have_no_gaps_at_exact_zeros(free):
         y = ax.get_lines()[0].get_ydata()
         assert np.all(np.isfinite(y)) and np.all(y > 0)  # the first point (exactly 0) is drawn
     plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------
+# the engineering figures (issue 26 §4): chosen from the content, one file each, written
+# atomically, never over a link or a foreign file (§6)
+# ------------------------------------------------------------------------------------------
+import errno  # noqa: E402
+import os  # noqa: E402
+
+from orbatt.cli import main  # noqa: E402
+from orbatt.dataset import figures as F  # noqa: E402
+from orbatt.dataset.figure_data import choose_figures, pointing_error  # noqa: E402
+from orbatt.dataset.figure_files import check_figure_folder, is_orbatt_figure, write_figures  # noqa: E402
+from orbatt.errors import InputError, OrbattError  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def wheels():  # PD on the orbital frame with three reaction wheels
+    return _run("lvlh-hold-wheels", '"600 s"')
+
+
+@pytest.fixture(scope="module")
+def bdot():  # B-dot in the IGRF field
+    return _run("cubesat-bdot-detumble", '"300 s"')
+
+
+@pytest.fixture(scope="module")
+def disturbed():  # drag, SRP, magnetic and gravity-gradient torques; one orbit: an eclipse
+    return _run("cubesat-3u-disturbances", '"1 orbits"')
+
+
+@pytest.fixture(scope="module")
+def ensemble():  # three members of the gravity-gradient LEO satellite, a quarter orbit
+    import warnings
+
+    from astropy import units as u
+
+    from orbatt import quaternion as qt
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = orbatt.load_scenario("gg-stabilized-leo")
+    rng = np.random.default_rng(5)
+    q0 = qt.normalize(sc.state0.q + 0.05 * rng.normal(size=(3, 4)))
+    states = orbatt.State.from_momentum(sc.body, q0, np.broadcast_to(sc.state0.g, (3, 3)))
+    tr = orbatt.propagate(sc.body, states, sc.potential, np.linspace(0.0, 1500.0, 51) * u.s, rtol=1e-9, atol=1e-9)
+    from orbatt import dataset as D
+
+    return D.to_dataset(tr, scenario_text=sc.spec.text)
+
+
+def _close(fig):
+    plt.close(fig)
+    return True
+
+
+def test_figures_chosen_from_the_content(free, circular, eccentric, wheels, bdot, disturbed, ensemble):
+    assert choose_figures(free) == ("rates", "drift")  # torque-free: nothing to point, an invariant to check
+    assert choose_figures(circular) == ("pointing", "rates", "torques", "drift")  # the Jacobi integral
+    assert choose_figures(eccentric) == ("pointing", "rates", "torques")  # nothing conserved: no drift
+    assert choose_figures(wheels) == ("pointing", "rates", "wheels", "torques")
+    assert choose_figures(bdot) == ("rates", "torques")  # B-dot has no pointing target
+    assert choose_figures(disturbed) == ("pointing", "rates", "torques")
+    assert choose_figures(ensemble) == ("pointing", "rates", "torques")  # no drift for cases together
+    assert free.orbatt.figures() == ("rates", "drift")
+
+
+def test_pointing_is_the_error_to_the_target_on_a_log_axis(wheels, eccentric):
+    angle, title, rpy = pointing_error(wheels)
+    assert "orbital frame target (PD)" in title
+    assert 29.0 < np.degrees(angle[0]) < 32.0  # the scenario starts 30 deg off the orbital frame
+    # the total angle bounds each of the 3-2-1 error angles
+    assert np.all(np.abs(rpy) <= angle[:, None] + 1e-12)
+    fig = wheels.orbatt.plot_figure("pointing")
+    top, bottom = fig.axes
+    assert top.get_yscale() == "log" and top.get_ylabel() == "pointing error [deg]"
+    np.testing.assert_allclose(top.get_lines()[0].get_ydata(), np.degrees(angle))
+    assert [line.get_label() for line in bottom.get_lines()] == ["roll", "pitch", "yaw"]
+    assert bottom.get_ylabel() == "error angle [deg]" and fig.axes[-1].get_xlabel() == "time [orbits]"
+    assert _close(fig)
+    # the rate relative to the orbital frame falls as the PD law catches the frame (0.6 -> 0.002 deg/s)
+    fig = F.plot_rates(wheels)
+    mag, rel = fig.axes[0].get_lines()
+    assert rel.get_label() == "|omega| relative to the orbital frame"
+    assert rel.get_ydata()[-1] < 0.01 < 0.05 < mag.get_ydata()[-1]  # |omega| -> the orbital rate, 0.063 deg/s
+    assert _close(fig)
+    assert "relative to the orbital frame (no control)" in pointing_error(eccentric)[1]
+
+
+def test_rates_in_deg_per_s_with_bdot_steady_state(bdot, free):
+    from astropy import units as u
+
+    fig = F.plot_rates(bdot, threshold=0.5 * u.deg / u.s)
+    top, comps = fig.axes
+    assert top.get_ylabel() == "|omega| [deg/s]" and comps.get_ylabel() == "omega [deg/s]"
+    mag, *refs = top.get_lines()
+    np.testing.assert_allclose(mag.get_ydata()[0], np.degrees(np.linalg.norm(bdot["omega"].values[0])))
+    labels = [r.get_label() for r in refs]
+    assert labels[0] == "detumble threshold = 0.5 deg/s" and labels[1].startswith("2 n: B-dot's steady state")
+    assert len(comps.get_lines()) == 3
+    assert _close(fig)
+    # a scenario with a detumble threshold of its own ([sweep] detumble_rate): drawn without asking
+    mc = _run("cubesat-detumble-montecarlo", '"120 s"')
+    fig = F.plot_rates(mc)
+    assert fig.axes[0].get_lines()[1].get_label() == "detumble threshold ([sweep] detumble_rate) = 0.5 deg/s"
+    assert _close(fig)
+    fig = F.plot_rates(free)  # a dimensionless problem keeps its units
+    assert fig.axes[0].get_ylabel() == "|omega| [dimensionless]"
+    assert _close(fig)
+
+
+def test_wheels_speeds_momentum_torque_and_limits(wheels):
+    fig = F.plot_wheels(wheels)
+    speed, momentum, torque = fig.axes
+    assert (speed.get_ylabel(), momentum.get_ylabel(), torque.get_ylabel()) == (
+        "speed [rpm]", "momentum [N m s]", "motor torque [N m]")
+    labels = [line.get_label() for line in speed.get_lines()]
+    assert labels[:3] == ["wheel 1 (body +x)", "wheel 2 (body +y)", "wheel 3 (body +z)"]
+    assert "max_speed = +-6000 rpm" in labels
+    np.testing.assert_allclose(speed.get_lines()[2].get_ydata()[0], 2000.0, rtol=1e-9)  # the momentum bias
+    assert any(line.get_label().startswith("max_torque = +-0.005") for line in torque.get_lines())
+    assert _close(fig)
+
+
+def test_torque_budget_and_eclipses(disturbed, bdot):
+    fig = F.plot_torques(disturbed)
+    (ax,) = fig.axes
+    assert ax.get_yscale() == "log" and ax.get_ylabel() == "|torque| [N m]"
+    assert [line.get_label() for line in ax.get_lines()] == [
+        "drag", "gravity gradient", "magnetic", "srp", "total external"]
+    assert ax.patches and "eclipse (shadow < 1)" in ax.get_legend_handles_labels()[1]
+    assert "(grey: eclipse)" in fig._suptitle.get_text()
+    assert _close(fig)
+    fig = F.plot_torques(bdot)  # one external term: no separate total; the dipole below
+    top, dip = fig.axes
+    assert [line.get_label() for line in top.get_lines()] == ["gravity gradient", "control"]
+    assert dip.get_ylabel() == "dipole [A m^2]" and any("max_dipole" in line.get_label() for line in dip.get_lines())
+    assert _close(fig)
+    fig = F.plot_rates(bdot)  # no shadow variable: no shading
+    assert not fig.axes[0].patches
+    assert _close(fig)
+
+
+def test_ensemble_draws_every_case(ensemble, monkeypatch):
+    fig = F.plot_pointing(ensemble)
+    (ax,) = fig.axes  # one panel: the per-axis angles of every case would be unreadable
+    assert len(ax.get_lines()) == 3 and "3 cases, one line each" in ax.get_title()
+    for e, line in enumerate(ax.get_lines()):
+        np.testing.assert_allclose(line.get_ydata()[1:], np.degrees(pointing_error(ensemble.isel(case=e))[0])[1:])
+    assert _close(fig)
+    monkeypatch.setattr(F, "ENSEMBLE_LINES", 2)  # more cases than lines: median and bands, said so
+    fig = F.plot_rates(ensemble)
+    ax = fig.axes[0]
+    # |omega| and the rate relative to the orbital frame: a median line and two bands each
+    assert len(ax.collections) == 4 and len(ax.get_lines()) == 2 and "median" in ax.get_title()
+    assert _close(fig)
+    with pytest.raises(ValueError, match="own invariant"):
+        F.draw(ensemble, "drift")
+
+
+def _png_names(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_files_named_after_the_figures_and_marked_as_orbatt(wheels, tmp_path):
+    paths = write_figures(wheels, tmp_path / "figs", "hold", dpi=40)
+    assert _png_names(tmp_path / "figs") == ["hold-pointing.png", "hold-rates.png", "hold-torques.png",
+                                             "hold-wheels.png"]
+    assert all(is_orbatt_figure(p) for p in paths)
+    write_figures(wheels, tmp_path / "figs", "hold", dpi=40)  # its own figures are replaced
+    other = tmp_path / "figs" / "hold-drift.png"  # a PNG orbatt did not write
+    plt.imsave(other, np.zeros((4, 4)))
+    assert not is_orbatt_figure(other)
+    with pytest.raises(InputError, match="^--plot: .*hold-drift.png' exists and is not an orbatt figure"):
+        check_figure_folder(tmp_path / "figs", "hold")
+
+
+def test_symlink_is_refused_and_its_target_untouched(tmp_path, capsys, monkeypatch):
+    """A link where a figure goes stops the run before it computes (exit 2); the target keeps
+    its content and the link stays a link: orbatt never writes through or replaces one."""
+    victim = tmp_path / "precious.txt"
+    victim.write_text("keep me\n")
+    (tmp_path / "figs").mkdir()
+    link = tmp_path / "figs" / "paper-torque-free-rates.png"
+    link.symlink_to(victim)
+    monkeypatch.chdir(tmp_path)
+    rc = main(["run", str(SCEN / "paper-torque-free.toml"), "-o", "r.nc", "--plot", "figs", "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].startswith("orbatt: error: --plot: ")
+    assert "symbolic link" in err[0]
+    assert victim.read_text() == "keep me\n" and link.is_symlink() and not (tmp_path / "r.nc").exists()
+
+
+def _one_line(capsys, option):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"orbatt: error: {option}: "), err
+    return err[0]
+
+
+def test_plot_o_existing_file_and_unwritable_folders(free, tmp_path, capsys, monkeypatch):
+    result = tmp_path / "r.nc"
+    free.orbatt.to_netcdf(result)
+    (tmp_path / "notes.txt").write_text("mine\n")
+    monkeypatch.chdir(tmp_path)
+    assert main(["plot", "r.nc", "-o", "notes.txt"]) == 2
+    assert "'notes.txt' exists and is not a folder" in _one_line(capsys, "-o")
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+    # a read-only folder (root writes in a mode-555 folder: /proc is read-only for everyone)
+    assert main(["plot", "r.nc", "-o", "/proc/figs"]) == 2
+    assert "cannot write" in _one_line(capsys, "-o")
+    # --plot: refused before the run, which would take hours
+    text = (SCEN / "paper-torque-free.toml").read_text().replace("t_end = ", "t_end = 1e7 #")
+    text = text.replace("output_step = ", "output_step = 1 #")
+    (tmp_path / "long.toml").write_text(text)
+    for folder, match in (("/proc/figs", "cannot write"), ("notes.txt", "exists and is not a folder")):
+        assert main(["run", "long.toml", "-o", "long.nc", "--plot", folder]) == 2
+        assert match in _one_line(capsys, "--plot")
+    assert not (tmp_path / "long.nc").exists()
+
+
+def test_plot_of_an_ensemble_file_draws_every_case(ensemble, tmp_path, capsys, monkeypatch):
+    ensemble.orbatt.to_netcdf(tmp_path / "ens.nc")
+    monkeypatch.chdir(tmp_path)
+    assert main(["plot", "ens.nc", "-o", "figs"]) == 0
+    assert _png_names(tmp_path / "figs") == ["ens-pointing.png", "ens-rates.png", "ens-torques.png"]
+    assert all(is_orbatt_figure(p) for p in (tmp_path / "figs").iterdir())
+
+
+def test_sweep_without_histories_says_why(tmp_path, capsys, monkeypatch):
+    import xarray as xr
+
+    ds = xr.Dataset({"integration_failed": ("case", np.zeros(3, dtype=np.int8))},
+                    attrs={"sweep_format": "1", "orbatt_version": orbatt.__version__})
+    ds.to_netcdf(tmp_path / "s.nc", engine="h5netcdf")
+    monkeypatch.chdir(tmp_path)
+    assert main(["plot", "s.nc", "-o", "figs"]) == 2
+    assert "no time histories" in _one_line(capsys, "file")
+
+
+def test_failed_write_leaves_no_partial_figure(free, tmp_path, monkeypatch, capsys):
+    """A full disk mid-write: the error names the option and the file, and nothing partial is
+    left - the earlier figure of that name is unchanged, no .tmp- file remains."""
+    folder = tmp_path / "figs"
+    first = write_figures(free, folder, "tf", dpi=40)
+    before = {p.name: p.read_bytes() for p in first}
+    from matplotlib.figure import Figure
+
+    real = Figure.savefig
+
+    def full_disk(self, fname, *args, **kwargs):
+        with open(fname, "wb") as f:
+            f.write(b"\x89PNG\r\n\x1a\n half a figure")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(Figure, "savefig", full_disk)
+    with pytest.raises(OrbattError, match=r"^--plot: cannot write .*tf-rates.png' \(No space left on device\)"):
+        write_figures(free, folder, "tf")
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+    monkeypatch.setattr(Figure, "savefig", real)
+    # from the command line: one line, exit 1, no result file half-written either
+    monkeypatch.setattr(Figure, "savefig", full_disk)
+    monkeypatch.chdir(tmp_path)
+    text = (SCEN / "paper-torque-free.toml").read_text()
+    (tmp_path / "s.toml").write_text(text.replace("t_end = ", "t_end = 2 #"))
+    assert main(["run", "s.toml", "-o", "r.nc", "--plot", "new", "--quiet"]) == 1
+    assert "No space left on device" in _one_line(capsys, "--plot")
+    assert list((tmp_path / "new").iterdir()) == []

@@ -75,8 +75,8 @@ def test_sample_along_orbit():
     np.testing.assert_array_equal(s.position, pos)
     np.testing.assert_array_equal(s.velocity, vel)
     assert abs((s.time[-1] - EPOCH).to_value(u.s) - 1000.0) < 1e-6
-    with pytest.raises(InputError, match="epoch"):
-        tables.sample_along_orbit(KeplerOrbit(7000 * u.km, 0.0, 0.0, 0.0, 0.0), 0.0, 10.0, 1.0)
+    undated = tables.sample_along_orbit(KeplerOrbit(7000 * u.km, 0.0, 0.0, 0.0, 0.0), 0.0, 10.0, 1.0)
+    assert undated.time is None and undated.t.size == 11  # no epoch: samples without dates (exponential drag)
     with pytest.raises(InputError, match="t1"):
         tables.sample_along_orbit(ORBIT, 10.0, 10.0, 1.0)
     with pytest.raises(InputError, match="step"):

@@ -60,3 +60,55 @@ def test_bad_inputs_name_the_argument():
         frames.gcrs_to_itrs(T, np.zeros((3, 3)))
     with pytest.raises(InputError, match="t: expected an astropy Time"):
         frames.gcrs_to_itrs(0.0, np.zeros((1, 3)))
+
+
+def test_erfa_rotation_is_astropys_transform():
+    """The fast GCRS -> ITRS matrix (ERFA's c2t06a with the IERS table's UT1 and polar motion)
+    against astropy's own frame transform of the basis vectors, over a day."""
+    import astropy.units as u
+    from astropy.time import Time
+
+    from orbatt.environment import frames
+
+    t = Time("2025-03-20T00:00:00", scale="utc") + np.linspace(0.0, 86400.0, 97) * u.s
+    fast = frames.rotation_gcrs_to_itrs(t)
+    slow = frames.rotation_gcrs_to_itrs_astropy(t)
+    assert np.abs(fast - slow).max() < 1e-14
+    np.testing.assert_allclose(np.einsum("nij,nkj->nik", fast, fast), np.broadcast_to(np.eye(3), fast.shape),
+                               atol=1e-15)
+
+
+EOP_CHILD = """
+import sys, numpy as np, astropy.units as u
+from astropy.time import Time
+from orbatt.environment import frames
+R = frames.rotation_gcrs_to_itrs(Time('2025-03-20T00:00:00') + np.linspace(0.0, 86400.0, 25) * u.s)
+print(frames.EOP_SOURCE, R.tobytes().hex())
+"""
+
+
+def test_the_earth_orientation_table_is_parsed_once_per_installation(tmp_path):
+    """Issue 25: astropy parses its bundled IERS table (1-2.5 s) in every process; orbatt keeps
+    the parsed table beside numba's cache: the next process reads it, with the same bits, and a
+    corrupted file is parsed again and rewritten."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+
+    def run():
+        r = subprocess.run([sys.executable, "-c", EOP_CHILD], capture_output=True, text=True, env=env, timeout=300)
+        assert r.returncode == 0, r.stderr
+        return r.stdout.split()
+
+    source, first = run()
+    assert source == "astropy"
+    cached = list((tmp_path / "orbatt").glob("iers-*.pickle"))
+    assert len(cached) == 1
+    source, again = run()
+    assert source == "cache" and again == first
+    cached[0].write_bytes(cached[0].read_bytes()[:100])  # truncated
+    source, third = run()
+    assert source == "astropy" and third == first
+    assert run()[0] == "cache"

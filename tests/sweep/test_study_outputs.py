@@ -122,3 +122,31 @@ def test_info_prints_each_outputs_percentiles_and_nan_count():
     row = next(x for x in lines if x.strip().startswith("pointing_error_max")).split()
     assert float(row[1]) == pytest.approx(2.0, rel=1e-3) and row[-1] == "deg"  # angles in degrees
     assert "detumble_time" in sweep_summary(ds, title="x")
+
+
+def test_sweep_figures_draw_every_output_against_every_parameter():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import xarray as xr
+
+    from orbatt.dataset.sweep_figures import draw_sweep
+
+    rng = np.random.default_rng(5)
+    ds = xr.Dataset({"detumble_time": ("case", rng.uniform(100, 900, 50), {"units": "s"}),
+                     "pointing_error_max": ("case", rng.uniform(0, 0.1, 50), {"units": "rad"}),
+                     "integration_failed": ("case", np.zeros(50, dtype=np.int8))},
+                    coords={"case": np.arange(50), "control_gain": ("case", rng.normal(4e4, 5e3, 50),
+                                                                     {"units": "A m2 s / T", "scenario_key": "control.gain"}),
+                            "omega1": ("case", rng.uniform(-0.1, 0.1, 50), {"units": "rad s^-1"})})
+    fig = draw_sweep(ds, "distributions")
+    axes = fig.axes
+    assert len(axes) == 4  # two outputs x (histogram, CDF)
+    assert axes[2].get_xlabel() == "pointing_error_max [deg]"  # angles in degrees
+    assert len(axes[1].get_lines()) == 4  # the CDF and p50, p95, p99
+    plt.close(fig)
+    fig = draw_sweep(ds, "scatter")
+    assert len(fig.axes) == 4  # 2 outputs x 2 parameters
+    assert fig.axes[2].get_xlabel() == "control.gain [A m2 s / T]"
+    plt.close(fig)

@@ -1,0 +1,253 @@
+"""What the engineering figures of a result draw (issue 26 §4): which figures a Dataset's
+content calls for (:func:`choose_figures`), and the series behind them - the pointing error
+to the control target or to the orbital frame (:func:`pointing_error`), the eclipses
+(:func:`eclipse_intervals`), the limits of the reaction wheels (:func:`wheel_limits`), the
+detumble threshold and B-dot steady-state rate (:func:`reference_rates`, :func:`thresholds`),
+the rate relative to the orbital frame (:func:`rate_to_orbital_frame`) and values in the units
+an attitude engineer reads (:func:`values_in`). No matplotlib here; :mod:`orbatt.dataset.figures` draws.
+
+Every function takes a single run or an ensemble (a ``case`` dimension first): arrays keep
+the Dataset's leading dimensions, ``(..., time)``.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from astropy import units as u
+
+from .. import quaternion as qt
+from ..units import parse_unit, unit_string
+from .plots import drift_series
+
+__all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
+           "reference_rates", "thresholds", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms",
+           "conserved", "log_floor"]
+
+#: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
+FIGURES = ("pointing", "rates", "wheels", "torques", "drift")
+
+
+def _json_attr(ds, name):
+    try:
+        return json.loads(ds.attrs.get(name) or "{}")
+    except (TypeError, ValueError):
+        return {}
+
+
+def control_law(ds):
+    """The control law the run used (``potential`` attribute's ``control``, a dict with
+    ``law`` ``"pd"`` or ``"bdot"`` and its settings), or None."""
+    c = _json_attr(ds, "potential").get("control")
+    return c if isinstance(c, dict) and c.get("law") else None
+
+
+def torque_terms(ds):
+    """Names of the torque variables a run records, in the order drawn: each external term
+    (``torque_<term>``), the total ``torque``, then ``torque_control``."""
+    terms = sorted(n for n in ds.data_vars if n.startswith("torque_") and n != "torque_control")
+    return terms + [n for n in ("torque", "torque_control") if n in ds.data_vars]
+
+
+def unit_factor(ds, name, unit):
+    """``(factor, unit label)``: the factor from variable ``name``'s stored unit to ``unit``
+    (e.g. ``"deg/s"``), or ``1`` and its own unit where it cannot be converted (a
+    dimensionless problem's ``"1"``)."""
+    src = ds[name].attrs.get("units", "1")
+    try:
+        target = parse_unit(unit) if isinstance(unit, str) else u.Unit(unit)
+        factor = float(parse_unit(src).to(target))
+    except (u.UnitConversionError, ValueError):
+        return 1.0, ("dimensionless" if src in ("1", "") else unit_string(parse_unit(src)))
+    return factor, unit if isinstance(unit, str) else unit_string(target)
+
+
+def values_in(ds, name, unit):
+    """``(values, unit label)``: variable ``name`` in ``unit`` (:func:`unit_factor`)."""
+    factor, label = unit_factor(ds, name, unit)
+    return np.asarray(ds[name].values, dtype=np.float64) * factor, label
+
+
+def pointing_error(ds):
+    """The pointing error of a run, or None where it has no pointing reference.
+
+    - PD control (``potential`` attribute): the angle to its target - the rotation angle of
+      ``q_orbital`` relative to ``target_q`` (identity by default) for ``target = "orbital"``,
+      of ``q`` relative to ``target_q`` for ``"inertial"``, and the angle between the body
+      axis ``target_axis`` and ``sun_direction`` for ``"sun"`` (needs that variable);
+    - B-dot control: None (the goal is the rate: see the ``rates`` figure);
+    - no control, with an orbit (``q_orbital``): the rotation angle of the body axes relative
+      to the orbital frame.
+
+    Returns
+    -------
+    tuple or None
+        ``(angle, title, components)``: ``angle`` (rad, ``(..., time)``), a title saying what it
+        is, and the roll, pitch, yaw of the error quaternion (rad, ``(..., time, 3)``; None for
+        a Sun-pointing error, which is one angle).
+    """
+    ctrl = control_law(ds)
+    if ctrl is not None and ctrl["law"] == "bdot":
+        return None
+    target = ctrl.get("target") if ctrl else None
+    if target == "sun":
+        if "sun_direction" not in ds:
+            return None
+        axis = np.asarray(ctrl.get("target_axis", (0.0, 0.0, 1.0)), dtype=np.float64)
+        b = qt.rotate(np.asarray(ds["q"].values), np.broadcast_to(axis, ds["q"].shape[:-1] + (3,)))
+        s = np.asarray(ds["sun_direction"].values)
+        angle = np.arctan2(np.linalg.norm(np.cross(b, s), axis=-1), np.sum(b * s, axis=-1))
+        return angle, f"angle between body axis {axis.tolist()} and the Sun (PD target)", None
+    if target == "inertial":
+        qe = qt.mul(qt.conj(np.asarray(ctrl["target_q"], dtype=np.float64)), np.asarray(ds["q"].values))
+        title = f"attitude error to the inertial target {np.round(ctrl['target_q'], 4).tolist()} (PD)"
+    elif "q_orbital" in ds:
+        q_orb = np.asarray(ds["q_orbital"].values)
+        tq = ctrl.get("target_q") if target == "orbital" else None
+        qe = q_orb if tq is None else qt.mul(qt.conj(np.asarray(tq, dtype=np.float64)), q_orb)
+        title = ("attitude error to the orbital frame target (PD)" if target == "orbital" else
+                 "attitude relative to the orbital frame (no control)")
+    else:
+        return None
+    qe = qt.normalize(qe)
+    # the rotation angle of qe, accurate at small angles: 2 atan2(|vector part|, |scalar part|)
+    angle = 2.0 * np.arctan2(np.linalg.norm(qe[..., 1:], axis=-1), np.abs(qe[..., 0]))
+    return angle, title, np.stack(qt.to_euler321(qe), axis=-1)
+
+
+def eclipse_intervals(ds, x):
+    """``[(x_start, x_end, umbra)]``: the stretches of the time axis values ``x`` where the body
+    is in the Earth's shadow (``shadow`` below 1; ``umbra``: it reaches 0). Empty without a
+    ``shadow`` variable (a run without SRP has none)."""
+    if "shadow" not in ds:
+        return []
+    s = np.asarray(ds["shadow"].values, dtype=np.float64)
+    while s.ndim > 1:  # the shadow depends on the orbit only: any member's
+        s = s[0]
+    dark = s < 1.0
+    out = []
+    k, n = 0, dark.size
+    while k < n:
+        if not dark[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < n and dark[j + 1]:
+            j += 1
+        out.append((x[max(k - 1, 0)] if k else x[k], x[j + 1] if j + 1 < n else x[j], bool(np.any(s[k:j + 1] <= 0.0))))
+        k = j + 1
+    return out
+
+
+def _scenario_spec(ds):
+    text = ds.attrs.get("scenario")
+    if not text:
+        return None
+    try:
+        from ..scenario.schema import parse
+
+        return parse(text, ds.attrs.get("title", "result"))
+    except Exception:  # noqa: BLE001 - a file of another version: no limits to draw
+        return None
+
+
+def wheel_limits(ds):
+    """``(max_speed, max_torque)``: each wheel's limits (rad/s, N m; NaN for none), from the
+    stored scenario (``scenario`` attribute), or None without one."""
+    spec = _scenario_spec(ds)
+    wheels = (spec.control or {}).get("wheels") if spec is not None else None
+    if not wheels or "wheel" not in ds.sizes or len(wheels) != ds.sizes["wheel"]:
+        return None
+    speed = [np.nan if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels]
+    torque = [np.nan if getattr(w, "max_torque_n_m", None) is None else w.max_torque_n_m for w in wheels]
+    return np.asarray(speed, dtype=np.float64), np.asarray(torque, dtype=np.float64)
+
+
+def thresholds(ds):
+    """The study thresholds of the stored scenario's ``[sweep]`` table: ``{"detumble_rate":
+    rad/s (plain in normalized units) or None, "settling_angle": rad or None}``."""
+    spec = _scenario_spec(ds)
+    sweep = getattr(spec, "sweep", None) if spec is not None else None
+    return {"detumble_rate": getattr(sweep, "detumble_rate", None),
+            "settling_angle": getattr(sweep, "settling_angle", None)}
+
+
+def reference_rates(ds):
+    """``[(rate, label)]``: the reference lines of the ``rates`` figure (rad/s, or the plain
+    rate of a normalized scenario) - the detumble threshold (``[sweep] detumble_rate``) where
+    the scenario has one and, for B-dot, twice the mean motion (the rate B-dot settles to in a
+    polar orbit)."""
+    out = []
+    rate = thresholds(ds)["detumble_rate"]
+    if rate is not None:
+        out.append((float(rate), "detumble threshold ([sweep] detumble_rate)"))
+    ctrl = control_law(ds)
+    period = _json_attr(ds, "orbit").get("period_s")
+    if ctrl is not None and ctrl["law"] == "bdot" and period:
+        out.append((2.0 * 2.0 * np.pi / float(period), "2 n: B-dot's steady state (n: mean motion)"))
+    return out
+
+
+def rate_to_orbital_frame(ds):
+    """The body rate relative to the orbital frame, ``omega - omega_O`` (body components, in
+    the unit of ``omega``; ``(..., time, 3)``), for a run held on (or drifting about) the orbital
+    frame: one whose pointing reference is that frame (:func:`pointing_error`). ``omega_O`` is
+    the orbital frame's rate, the true anomaly's rate about the orbit normal ``o3``. None
+    otherwise (no orbit, B-dot, an inertial or Sun target, fewer than 3 outputs)."""
+    ctrl = control_law(ds)
+    if ctrl is not None and (ctrl["law"] != "pd" or ctrl.get("target") != "orbital"):
+        return None
+    if not {"q_orbital", "true_anomaly", "omega"} <= set(ds.variables) or ds.sizes["time"] < 3:
+        return None
+    t = np.asarray(ds["time"].values, dtype=np.float64)
+    nu = np.unwrap(np.asarray(ds["true_anomaly"].values, dtype=np.float64), axis=-1)
+    nu_dot = np.gradient(nu, t, axis=-1)
+    q_orb = np.asarray(ds["q_orbital"].values, dtype=np.float64)
+    w_orb = np.zeros(q_orb.shape[:-1] + (3,))
+    w_orb[..., 2] = np.broadcast_to(nu_dot, q_orb.shape[:-1])
+    return np.asarray(ds["omega"].values, dtype=np.float64) - qt.rotate_inv(q_orb, w_orb)
+
+
+def conserved(ds):
+    """True when the run has an invariant worth a drift figure: no control, no wheels, no
+    torque but the gravity gradient, one run (not an ensemble: each case has its own
+    invariant), and :func:`orbatt.dataset.plots.drift_series` finds the
+    energy or the Jacobi integral conserved."""
+    if control_law(ds) is not None or "wheel_speed" in ds or "case" in ds.dims:
+        return False
+    if any(n not in ("torque", "torque_gravity_gradient") for n in torque_terms(ds)):
+        return False
+    first = ds.isel(case=0) if "case" in ds.dims else ds
+    return not drift_series(first)[1].startswith("energy change")
+
+
+def choose_figures(ds):
+    """The figures the content of ``ds`` calls for, in :data:`FIGURES` order.
+
+    - ``pointing``: a pointing reference (:func:`pointing_error`: a PD target, or the orbital
+      frame of an uncontrolled run with an orbit);
+    - ``rates``: always (``omega``);
+    - ``wheels``: reaction wheels (``wheel_speed``);
+    - ``torques``: any torque (``torque``, ``torque_<term>``, ``torque_control``);
+    - ``drift``: an invariant to check the integration by (:func:`conserved`).
+    """
+    out = []
+    if pointing_error(ds) is not None:
+        out.append("pointing")
+    out.append("rates")
+    if "wheel_speed" in ds:
+        out.append("wheels")
+    if torque_terms(ds):
+        out.append("torques")
+    if conserved(ds):
+        out.append("drift")
+    return tuple(out)
+
+
+def log_floor(y):
+    """``y`` with values at or below 0 raised to a floor (a tenth of the smallest positive
+    value, or 1e-18), so that a log axis draws every point; non-finite values kept."""
+    y = np.asarray(y, dtype=np.float64)
+    pos = y[np.isfinite(y) & (y > 0)]
+    floor = pos.min() / 10.0 if pos.size else 1e-18
+    return np.where(y <= 0.0, floor, y)
