@@ -631,9 +631,10 @@ def part_a(samples, repeats, bsk_cases, fresh, fine, cores, workers):
 #: the environment-torque variants of the scenario: (label, regex substitutions)
 _DIPOLE, _FIELD = r"^residual_dipole = .*\n", r"^magnetic_field = .*\n"
 _ATMOSPHERE, _SHADOW = r"^(atmosphere|f107|f107a|ap|corotation) = .*\n", r"^shadow = .*\n"
+_FACETS = r"^\[\[body\.facets\]\].*\n(?:[^\[\n].*\n|\n)*"
 ENV_VARIANTS = [
     ("GG + magnetic (residual dipole, IGRF)", [(r"^drag = true", "drag = false"), (r"^srp = true", "srp = false"),
-                                               (_ATMOSPHERE, ""), (_SHADOW, "")]),
+                                               (_ATMOSPHERE, ""), (_SHADOW, ""), (_FACETS, "")]),
     ("GG + drag (NRLMSIS, 6 facets)", [(r"^srp = true", "srp = false"), (_DIPOLE, ""), (_FIELD, ""), (_SHADOW, "")]),
     ("GG + SRP (conical shadow, 6 facets)", [(r"^drag = true", "drag = false"), (_DIPOLE, ""), (_FIELD, ""),
                                              (_ATMOSPHERE, "")]),
