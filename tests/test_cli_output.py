@@ -132,7 +132,7 @@ def test_earlier_result_is_overwritten(tmp_path, cli):
 @pytest.mark.parametrize("command", ["run", "sweep"])
 def test_unusable_output_fails_before_the_run(command, tmp_path, cli):
     """The scenario would run for minutes: the refusal comes at once."""
-    path = scenario(tmp_path, t_end="1e7", output_step="1")
+    path = scenario(tmp_path, t_end="1e6", output_step="1")  # long (more outputs are refused up front)
     cases = [("missing/r.nc", "does not exist"), (".", "is a folder"), (str(tmp_path), "is a folder")]
     if os.geteuid() != 0:
         ro = tmp_path / "ro"

@@ -178,10 +178,12 @@ def test_a_tle_beyond_astropys_tables_runs_with_one_warning():
         warnings.simplefilter("always")
         orbit = TleOrbit([future, L2], 1 * u.h)
         pos, _ = orbit.state(np.linspace(0.0, 3600.0, 7))
+    # (a ResourceWarning is another test's file collected meanwhile, not this orbit's)
+    caught = [w for w in caught if not issubclass(w.category, ResourceWarning)]
     assert [w.category for w in caught] == [TleDatesWarning]
     assert "tle: the dates 2045-12-09" in str(caught[0].message)
     assert np.all(np.isfinite(pos)) and 6700 < np.linalg.norm(pos, axis=1).min()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         TleOrbit([L1, L2], 1 * u.h)              # inside the tables: no warning
-    assert caught == []
+    assert [w for w in caught if not issubclass(w.category, ResourceWarning)] == []
