@@ -493,6 +493,12 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("orbatt: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (`orbatt scenarios | head`): stop quietly
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit's flush
+        except (OSError, ValueError):
+            pass
+        return EXIT_FAILURE
     except (Exception, RecursionError) as exc:  # noqa: BLE001 - a bug or a resource failure: still one line
         if args.debug:
             raise

@@ -203,3 +203,18 @@ def test_warnings_are_one_line(tmp_path):
     r = cli("run", path, "-o", tmp_path / "k.nc", "--quiet")
     assert r.returncode == 0
     assert r.stderr.strip().startswith("orbatt: warning: periapsis") and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_reader_that_goes_away_ends_the_listing_quietly():
+    """``orbatt scenarios | head -1``: the reader closed the pipe (here before the first write);
+    no traceback, no error line, a non-zero exit."""
+    import os
+
+    r_fd, w_fd = os.pipe()
+    os.close(r_fd)  # the reader is gone
+    try:
+        r = subprocess.run([sys.executable, "-m", "orbatt.cli", "scenarios"], stdout=w_fd, stderr=subprocess.PIPE,
+                           text=True, cwd=tempfile.gettempdir(), timeout=120)
+    finally:
+        os.close(w_fd)
+    assert r.stderr == "" and r.returncode != 0
