@@ -9,6 +9,29 @@ extended right-hand side), its :data:`~orbatt.core.model.KIND_DESCRIPTIONS` and 
 Dataset names of :mod:`orbatt.torques` are all derived from :data:`KINDS`; the compiled
 dispatch (``term_value``, ``term_constants``) stays an if-chain on the codes, as numba needs.
 
+The parameters (``params[p0:p1]``) and table of each kind's row:
+
+=====================  ====  =====================================================================
+term kind              code  params
+=====================  ====  =====================================================================
+heavy top (eq. 18)     1     ``[s Mg, xc1, xc2, xc3]`` (:func:`orbatt.core.potentials.heavy_top`)
+gravity gradient       2     ``[GM]``; reads the orbit's ``r`` and radial unit vector
+(eq. 20)                     (:func:`orbatt.core.potentials.gravity_gradient`)
+aerodynamic drag       3     :func:`~orbatt.core.model.drag_params`: the atmosphere's rotation rate
+of flat plates               and the facets of :mod:`orbatt.core.torques`; reads the orbit's position
+                             and velocity; table: the density (a torque: ``G = -2 q (0, tau)``)
+solar radiation        4     :func:`~orbatt.core.model.srp_params`; table: the Sun's position
+pressure
+magnetic dipole        5     the body's dipole (3); table: the field ``B`` (inertial)
+reaction wheels        6     :func:`orbatt.core.control.wheel_params` (the body is a gyrostat and
+                             the state ``(q, Q, h)``, :mod:`orbatt.core.gyrostat`)
+PD control             7     :func:`orbatt.core.control.pd_params`; table: the Sun's position
+                             (``target = sun``)
+B-dot control          8     ``[gain, max dipole]``; table: the field ``B`` (inertial)
+constant body torque   9     ``[tau1, tau2, tau3]`` (body axes): thruster misalignment,
+                             outgassing; reads nothing (a torque: ``G = -2 q (0, tau)``)
+=====================  ====  =====================================================================
+
 Adding a kind: a :class:`TermKind` here, its kernel (a function of ``(q, c)`` and its
 parameters, in :mod:`orbatt.core.torques` or :mod:`orbatt.core.potentials`) with a branch in
 ``core.model.term_value``, and the API/scenario key that builds its row.

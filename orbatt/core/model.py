@@ -30,26 +30,7 @@ Keplerian, in the      3     as Keplerian; the independent variable of the step 
 eccentric anomaly            eccentric anomaly ``E`` instead of the time (:func:`orbit_at`)
 =====================  ====  =====================================================================
 
-=====================  ====  =====================================================================
-term kind              code  params
-=====================  ====  =====================================================================
-heavy top (eq. 18)     1     ``[s Mg, xc1, xc2, xc3]`` (:func:`orbatt.core.potentials.heavy_top`)
-gravity gradient       2     ``[GM]``; reads the orbit's ``r`` and radial unit vector
-(eq. 20)                     (:func:`orbatt.core.potentials.gravity_gradient`)
-aerodynamic drag       3     :func:`drag_params`: an exponential atmosphere, its rotation rate and
-of flat plates               the facets of :mod:`orbatt.core.torques`; reads the orbit's position
-                             and velocity (a torque: ``G = -2 q (0, tau)``)
-solar radiation        4     :func:`srp_params`; table: the Sun's position
-pressure
-magnetic dipole        5     the body's dipole (3); table: the field ``B`` (inertial)
-reaction wheels        6     :func:`orbatt.core.control.wheel_params` (the body is a gyrostat and
-                             the state ``(q, Q, h)``, :mod:`orbatt.core.gyrostat`)
-PD control             7     :func:`orbatt.core.control.pd_params`; table: the Sun's position
-                             (``target = sun``)
-B-dot control          8     ``[gain, max dipole]``; table: the field ``B`` (inertial)
-constant body torque   9     ``[tau1, tau2, tau3]`` (body axes): thruster misalignment,
-                             outgassing; reads nothing (a torque: ``G = -2 q (0, tau)``)
-=====================  ====  =====================================================================
+The term kinds (rows ``1..n``), their codes and parameters: :mod:`orbatt.core.kinds`.
 
 The last three are the **extended** kinds (:data:`EXTENDED_KINDS`): a model holding one gets
 row 0's :data:`EXTENDED` flag, and the right-hand side of :mod:`orbatt.core.hamiltonian`

@@ -13,9 +13,9 @@ from .. import quaternion as qt
 from .. import units as U
 from ..binary import BinarySystem, Impulse, binary_content, propagate_binary
 from ..binary.system import rtn_basis
-from ..errors import InputError, IntegrationError, ScenarioError
+from ..errors import InputError
 from .binary_schema import BinarySpec
-from .build import build_output_times
+from .build import build_output_times, run_to_content
 from .fields import FieldContext
 
 __all__ = ["BinaryScenario"]
@@ -116,15 +116,8 @@ class BinaryScenario:
         if m != "splitting":  # the splitting's settings do not apply to the adaptive methods
             kw.pop("step", None)
             kw.pop("composition", None)
-        try:
-            traj = propagate_binary(self.system, self.y0, self.times, method=m, impulses=self.impulses, **kw)
-        except InputError as exc:
-            raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
-        except IntegrationError as exc:
-            partial = getattr(exc, "trajectory", None)
-            exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
-            raise
-        return self._content(traj)
+        return run_to_content(self.path or self.name, m, lambda: propagate_binary(
+            self.system, self.y0, self.times, method=m, impulses=self.impulses, **kw), self._content)
 
     def _content(self, traj):
         return binary_content(traj, scenario_text=self.text, title=f"orbatt: {self.name}")

@@ -15,7 +15,7 @@ from astropy import units as u
 
 from .. import quaternion as qt
 from .. import units as U
-from ..errors import InputError, ScenarioError
+from ..errors import InputError, IntegrationError, ScenarioError
 from ..methods.problem import DEFAULT_MAX_STEPS
 from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit
 from ..potentials import GravityGradient, HeavyTop, TorqueFree
@@ -29,7 +29,7 @@ from .work import torque_rates
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
            "build_potential",
            "build_environment_torques", "build_control", "build_initial_state",
-           "build_output_times", "check_work", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
+           "build_output_times", "check_work", "run_to_content", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
 #: time and the run needs working copies of it (2e6 outputs: 0.7 GB; a day every 0.05 s)
@@ -310,3 +310,20 @@ def _spin_bound(state0):
         return math.inf
     Q = state0.Q.tolist()
     return math.sqrt(sum(x * x for x in Q)) / (2.0 * min(state0.body.inertia_value.tolist())) * (1.0 + 1e-6)
+
+
+def run_to_content(where, method, run, content):
+    """``content(run())`` for a scenario's :meth:`run_content`: an
+    :class:`~orbatt.errors.InputError` of the run (e.g. a fixed-step method without
+    ``[integration] step``) becomes a :class:`~orbatt.errors.ScenarioError` naming ``where`` and
+    the method; an :class:`~orbatt.errors.IntegrationError` keeps what was computed until then
+    as its ``dataset`` (marked incomplete; None if nothing was) and is raised again."""
+    try:
+        traj = run()
+    except InputError as exc:
+        raise ScenarioError(f"{where}: [integration] (method {method!r}): {exc}") from None
+    except IntegrationError as exc:
+        partial = getattr(exc, "trajectory", None)
+        exc.dataset = content(partial).to_dataset() if partial is not None and partial.t.size else None
+        raise
+    return content(traj)

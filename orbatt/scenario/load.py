@@ -15,10 +15,10 @@ from astropy import units as u
 from .. import units as U
 from ..body import RigidBody
 from ..environment.frames import one_dates_warning
-from ..errors import InputError, IntegrationError, ScenarioError
+from ..errors import ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
                     build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin,
-                    estimate_steps, tle_period)
+                    estimate_steps, run_to_content, tle_period)
 from .fields import FieldContext
 from .schema import Spec, parse
 from .binary_schema import BinarySpec
@@ -138,15 +138,8 @@ class Scenario:
         # ERFA's and astropy's warnings for dates beyond their tables (tens of lines from the
         # environment's tables and the outputs) come out as one
         with one_dates_warning(epoch) if epoch is not None else contextlib.nullcontext():
-            try:
-                traj = propagate(self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw)
-            except InputError as exc:  # e.g. a fixed-step method chosen without [integration] step
-                raise ScenarioError(f"{self.path or self.name}: [integration] (method {m!r}): {exc}") from None
-            except IntegrationError as exc:
-                partial = getattr(exc, "trajectory", None)
-                exc.dataset = self._content(partial).to_dataset() if partial is not None and partial.t.size else None
-                raise
-            return self._content(traj)
+            return run_to_content(self.path or self.name, m, lambda: propagate(
+                self.body, self.state0, self.potential, self.times, method=m, progress=progress, **kw), self._content)
 
     def _content(self, traj):
         epoch = self.orbit.epoch if self.orbit is not None else None
