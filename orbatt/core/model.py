@@ -318,6 +318,13 @@ def gradient(t, q, inertia, terms, params, table, work):
     return U, G
 
 
+
+@jit
+def gradient_called(t, q, inertia, terms, params, table, work):
+    """:func:`gradient` compiled once and called, not inlined: for the cold call sites (every
+    inlined site repeats the type inference and lowering of the whole term dispatch)."""
+    return gradient(t, q, inertia, terms, params, table, work)
+
 @jit_inline
 def gradient_at(s, q, inertia, terms, params, table, work):
     """``(dt/ds, U, G)``: the total potential and generalized gradient of all terms at the step
@@ -415,7 +422,7 @@ def evaluate_many(t, q, inertia, terms, params, table, work):
     inertia_t = (inertia[0], inertia[1], inertia[2])
     for i in range(n):
         qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        u, g = gradient(t[i], qi, inertia_t, terms, params, table, work)
+        u, g = gradient_called(t[i], qi, inertia_t, terms, params, table, work)
         U[i] = u
         tq = pot.torque_from_gradient(qi, g)
         for k in range(4):
