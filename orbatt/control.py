@@ -208,6 +208,12 @@ class PDControl:
         params = kc.pd_params(TARGETS[self.target], self.kp * _N_M, self.kd * _N_M, tmax, values, axes)
         return (km.PD_CONTROL, params, sun_table)
 
+    def model_row(self, wheels, tables):
+        """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
+        gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
+        Sun's position (``"sun"``) for ``target = "sun"``."""
+        return self.row(wheels, tables("sun") if self.target == "sun" else None)
+
     def describe(self):
         d = {"law": "pd", "target": self.target, "kp_N_m": self.kp, "kd_N_m_s": self.kd,
              "max_torque_N_m": self.max_torque, "actuator": self.actuator}
@@ -243,6 +249,11 @@ class BDotControl:
         """The :data:`~orbatt.core.model.BDOT_CONTROL` row with the field along the orbit
         (T, inertial; a spline table of :mod:`orbatt.core.environment`)."""
         return (km.BDOT_CONTROL, [self.gain * _N_M, self.max_dipole * _N_M], field_table)
+
+    def model_row(self, wheels, tables):
+        """The law's model row (:meth:`row`; ``wheels`` unused); ``tables(name)`` gives the
+        magnetic field along the orbit (``"field"``, :meth:`orbatt.EnvironmentTorques.field_table`)."""
+        return self.row(tables("field"))
 
     def describe(self):
         return {"law": "bdot", "gain_A_m2_s_per_T": self.gain, "max_dipole_A_m2": self.max_dipole}

@@ -24,6 +24,7 @@ from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
 from ..torques import EnvironmentTorques, sample_margin
 from ..orbital import state_from_orbital
+from .torques_schema import torque_arguments
 from .work import torque_rates
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
@@ -176,16 +177,13 @@ def build_environment_torques(spec, orbit, t_end):
             atmosphere = PiecewiseExponentialAtmosphere()
     if tq["residual_dipole"] is not None:
         field = IGRFField() if env["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    dipole = None if tq["residual_dipole"] is None else tq["residual_dipole"] * u.A * u.m**2
     control = None if spec.control is None else spec.control["control"]
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    constant = None if tq.get("constant") is None else tq["constant"] * u.N * u.m
     gg = spec.potential_kind == "gravity-gradient"
     return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=tq["facets"],
-                              gravity_gradient=gg, drag=tq["drag"], srp=tq["srp"], residual_dipole=dipole,
-                              atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
-                              corotation=env["corotation"], control=control, constant_torque=constant)
+                              gravity_gradient=gg, atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
+                              corotation=env["corotation"], control=control, **torque_arguments(tq))
 
 
 def build_control(spec, orbit, t_end):

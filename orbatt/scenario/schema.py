@@ -73,6 +73,7 @@ from ..methods import METHODS
 from ..methods.dop853 import INDEPENDENT_VARIABLES
 from ..methods.problem import MAX_ATOL, MAX_RTOL
 from ..orbits import R_EARTH
+from ..terms import torque_key_docs
 
 __all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES",
            "PROVIDERS"]
@@ -147,15 +148,6 @@ position          length, 3 values  required  centre of pressure from the centre
 drag_coefficient  plain             2.2       C_D of the plate (drag)
 specular          plain in [0, 1]   0         specular reflectivity (SRP); absorbed = 1 - specular - diffuse
 diffuse           plain in [0, 1]   0         diffuse reflectivity (SRP)
-
-[torques]
-drag             true | false                      false  aerodynamic drag of the facets (needs [[body.facets]])
-srp              true | false                      false  solar radiation pressure on the facets (needs facets and
-                                                          an epoch: [orbit] epoch or a TLE's)
-residual_dipole  magnetic moment (A m2), 3 values  none   the body's dipole m: torque m x B (body axes)
-constant         torque (N m), 3 values            none   a constant body torque (body axes: thruster
-                                                          misalignment, outgassing); needs no orbit (also with
-                                                          kind = 'torque-free')
 
 [environment]
 atmosphere      'exponential' | 'nrlmsis' | 'none'  'exponential' with drag        density model (NRLMSIS 2.1 through
@@ -232,6 +224,8 @@ independent_variable  text       'auto'                          DOP853's variab
 [sweep]
 # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
 """)
+#: the [torques] keys are described by their terms (orbatt.terms)
+KEY_DOCS["torques"] = torque_key_docs()
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: central body radii (km) below which an apoapsis is refused
 BODY_RADII = {"earth": R_EARTH}
