@@ -304,11 +304,6 @@ class EnvironmentTorques(Potential):
         self.term_kinds = [r[0] for r in rows]
         return orbit_row, rows
 
-    def control_row(self, wheels):
-        """The model row of the control law (:mod:`orbatt.control`) for a body with ``wheels``,
-        the fields it reads sampled along the orbit (:meth:`field_table`)."""
-        return self.control.model_row(wheels, self.field_table)
-
     @property
     def time_span(self):
         """``(t_start, t_end)`` (s): the span the environment was sampled over."""

@@ -60,6 +60,7 @@ import numpy as np
 
 from .. import units as U
 from ..body import RigidBody
+from ..control import reaction_wheel
 from ..errors import InputError
 from ..epoch import parse_epoch
 from .key_docs import parse_key_docs
@@ -272,7 +273,7 @@ class Spec:
     integration: dict = field(default_factory=dict)
     sweep: SweepSpec | None = None  # the [sweep] table, if any
     torques: dict | None = None  # [torques], [environment] and the facets (torques_schema.py)
-    control: dict | None = None  # [control] and the wheels (control_schema.py)
+    control: dict | None = None  # [control] and the wheels, plain settings (control_schema.py)
 
 
 def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
@@ -349,7 +350,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     control = parse_control(ctx, data, kind, orbit, dimless, integ["method"])
     if control is not None and control["wheels"]:
         try:  # the gyrostat must keep inertia about every axis
-            RigidBody(inertia * U.INERTIA, wheels=control["wheels"])
+            RigidBody(inertia * U.INERTIA, wheels=[reaction_wheel(w) for w in control["wheels"]])
         except InputError as exc:
             raise ctx.error("[[body.wheels]] inertia", str(exc).split(": ", 1)[-1]) from None
     sweep = None

@@ -124,15 +124,17 @@ def torque_rates(spec):
     c = spec.control
     if c is not None:
         law = c["control"]
-        if law is not None and hasattr(law, "kd"):
-            rates.append((math.sqrt(law.kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {law.kp:.3g} N m)"))
-            rates.append((law.kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {law.kd:.3g} N m s)"))
+        if law is not None and law["law"] == "pd":
+            kp, kd = law["kp"], law["kd"]
+            rates.append((math.sqrt(kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {kp:.3g} N m)"))
+            rates.append((kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {kd:.3g} N m s)"))
         elif law is not None:
-            rates.append((law.gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {law.gain:.3g} "
-                                                                         "A m2 s / T)"))
+            gain = law["gain"]
+            rates.append((gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {gain:.3g} "
+                                                                     "A m2 s / T)"))
         for k, w in enumerate(c["wheels"]):
-            speed = max(abs(w.speed_rad_s), w.max_speed_rad_s or 0.0)
-            h = w.inertia_kg_m2 * speed
+            speed = max(abs(w["speed"]), w["max_speed"] or 0.0)
+            h = w["inertia"] * speed
             if h > 0:
                 rates.append((h / inertia, f"[[body.wheels]] {k + 1} speed",
                               f"the nutation of wheel momentum {h:.3g} N m s"))
