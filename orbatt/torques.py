@@ -22,6 +22,7 @@ from astropy import units as u
 from . import units as U
 from .core import model as km
 from .core import potentials as kp
+from .core.kinds import BY_NAME
 from .environment import sun as esun
 from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sample_along_orbit, tabulate
 from .control import BDotControl, PDControl
@@ -30,13 +31,13 @@ from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
 from .terms import TERMS
 
-__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "FIELDS_SOURCE", "sample_margin"]
+__all__ = ["Facet", "facet", "EnvironmentTorques", "TERM_NAMES", "FIELDS_SOURCE", "sample_margin"]
 
 #: where the Dataset's environment fields come from (its variables' ``source`` attribute)
 FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
                  "interpolated; docs/design.md §10)")
-#: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.terms`)
-TERM_NAMES = {term.kind.code: term.name for term in TERMS}
+#: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
+TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
 _AREA = u.m**2
 _LENGTH_M = u.m
 
@@ -118,6 +119,12 @@ class Facet:
         self.specular = float(specular)
         self.diffuse = float(diffuse)
 
+    def settings(self):
+        """The plain settings (SI floats: m^2, m) that :func:`facet` makes this plate of again."""
+        return {"area": float(self.area.to_value(_AREA)), "normal": self.normal.tolist(),
+                "position": self.position.to_value(_LENGTH_M).tolist(), "drag_coefficient": self.drag_coefficient,
+                "specular": self.specular, "diffuse": self.diffuse}
+
     def row(self, coefficient_km2):
         """The kernel row ``[c, n, r (km), C_s, C_d]`` (:data:`orbatt.core.torques.FACET_SIZE`)."""
         return np.r_[coefficient_km2, self.normal, self.position.to_value(u.km), self.specular, self.diffuse]
@@ -129,6 +136,14 @@ class Facet:
     def __repr__(self):
         return (f"Facet(area={self.area:.4g}, normal={self.normal.tolist()}, position={self.position}, "
                 f"C_D={self.drag_coefficient}, specular={self.specular}, diffuse={self.diffuse})")
+
+
+def facet(settings, name="facet"):
+    """The :class:`Facet` of plain ``settings`` (:meth:`Facet.settings`: area in m^2, position in
+    m), whose constructor checks every rule (:class:`~orbatt.errors.InputError` naming
+    ``name.key``)."""
+    return Facet(settings["area"] * _AREA, settings["normal"], np.asarray(settings["position"]) * _LENGTH_M,
+                 settings["drag_coefficient"], settings["specular"], settings["diffuse"], name=name)
 
 
 class EnvironmentTorques(Potential):

@@ -23,7 +23,7 @@ from ..potentials import GravityGradient, HeavyTop, TorqueFree
 from ..environment.atmosphere import NRLMSIS, ExponentialAtmosphere, PiecewiseExponentialAtmosphere
 from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
-from ..torques import EnvironmentTorques, sample_margin
+from ..torques import EnvironmentTorques, facet, sample_margin
 from ..orbital import state_from_orbital
 from .torques_schema import torque_arguments
 from .work import torque_rates
@@ -183,7 +183,7 @@ def build_environment_torques(spec, orbit, t_end):
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     gg = spec.potential_kind == "gravity-gradient"
-    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=tq["facets"],
+    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=[facet(f) for f in tq["facets"]],
                               gravity_gradient=gg, atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
                               corotation=env["corotation"], control=control, **torque_arguments(tq))
 

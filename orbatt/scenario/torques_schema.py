@@ -40,7 +40,7 @@ from astropy import units as u
 
 from ..errors import InputError
 from ..terms import BY_KEY
-from ..torques import Facet
+from ..torques import facet
 from .fields import parse_choice, parse_quantity, parse_vector
 from .ranges import RANGES
 
@@ -106,16 +106,19 @@ def _facets(ctx, raw):
         cd = _number(ctx, f"{where} drag_coefficient", f.get("drag_coefficient", 2.2), "body.facets", "drag_coefficient")
         cs = _number(ctx, f"{where} specular", f.get("specular", 0.0), "body.facets", "specular")
         cdf = _number(ctx, f"{where} diffuse", f.get("diffuse", 0.0), "body.facets", "diffuse")
+        settings = {"area": area, "normal": normal.tolist(), "position": pos.tolist(), "drag_coefficient": cd,
+                    "specular": cs, "diffuse": cdf}
         try:
-            out.append(Facet(area * u.m**2, normal, pos * u.m, cd, cs, cdf, name=where))
+            facet(settings, name=where)  # the plate's own rules
         except InputError as exc:
             raise ctx.error(where, str(exc).split(": ", 1)[-1]) from None
+        out.append(settings)
     return out
 
 
 def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
-    """The torque settings of a scenario (``None`` without ``[torques]``): a dict of
-    ``facets`` (list of :class:`~orbatt.torques.Facet`), ``drag``, ``srp``, ``residual_dipole``
+    """The torque settings of a scenario, plain data (``None`` without ``[torques]``): a dict of
+    ``facets`` (each plate's settings, :meth:`~orbatt.torques.Facet.settings`), ``drag``, ``srp``, ``residual_dipole``
     (A m^2 or None), ``constant`` (N m or None) and ``environment`` (the models' settings, SI floats); raises
     :class:`~orbatt.scenario.ScenarioError` naming the key. ``bdot``: a B-dot law reads
     ``[environment] magnetic_field`` (:mod:`orbatt.scenario.control_schema`)."""

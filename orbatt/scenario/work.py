@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from astropy import units as u
 
 from ..environment.atmosphere import PiecewiseExponentialAtmosphere
 from ..environment.sun import SRP_FLUX
@@ -85,9 +84,9 @@ def _facet_torques(spec, peri):
         v = (v_p + _OMEGA_EARTH * r_p) * 1e3
         q_drag = 0.5 * _density_bound(tq["environment"], r_p - R_EARTH) * v * v
     for k, f in enumerate(tq["facets"]):
-        area = float(u.Quantity(f.area, u.m**2).to_value(u.m**2))
-        arm = float(np.linalg.norm(u.Quantity(f.position, u.m).to_value(u.m)))
-        pressure = q_drag * f.drag_coefficient + (2.0 * _P_SUN if tq["srp"] else 0.0)
+        area = f["area"]  # m2
+        arm = float(np.linalg.norm(f["position"]))  # m
+        pressure = q_drag * f["drag_coefficient"] + (2.0 * _P_SUN if tq["srp"] else 0.0)
         out.append((pressure * area * arm, f"[[body.facets]] {k + 1} area"))
     return out
 
