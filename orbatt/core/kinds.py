@@ -34,9 +34,7 @@ constant body torque   9     ``[tau1, tau2, tau3]`` (body axes): thruster misali
 
 Adding a kind: a :class:`TermKind` here, its kernel (a function of ``(q, c)`` and its
 parameters, in :mod:`orbatt.core.torques` or :mod:`orbatt.core.potentials`) with a branch in
-``core.model.term_value`` (and in ``term_constants`` if it reads the orbit or a table), and, for a
-torque of :class:`orbatt.EnvironmentTorques`, its API descriptor in :mod:`orbatt.terms` (the
-scenario key, its docs and range, the row builder, the Dataset fields).
+``core.model.term_value``, and the API/scenario key that builds its row.
 """
 from __future__ import annotations
 
