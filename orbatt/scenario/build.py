@@ -183,9 +183,10 @@ def build_environment_torques(spec, orbit, t_end):
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     gg = spec.potential_kind == "gravity-gradient"
-    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=[facet(f) for f in tq["facets"]],
-                              gravity_gradient=gg, atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
-                              corotation=env["corotation"], control=control, **torque_arguments(tq))
+    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None,
+                              facets=[facet(f) for f in tq["facets"]], gravity_gradient=gg, atmosphere=atmosphere,
+                              magnetic_field=field, shadow=env["shadow"], corotation=env["corotation"], control=control,
+                              **torque_arguments(tq))
 
 
 def build_control(spec, orbit, t_end):

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from astropy import units as u
 
-from ..control import LAWS, control_law, reaction_wheel
+from ..control import ACTUATORS, LAWS, TARGETS, control_law, reaction_wheel
 from ..errors import InputError
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
@@ -113,28 +113,31 @@ def _pd(ctx, c, data, orbit, wheels):
     for key in ("kp", "kd"):
         if key not in c:
             raise ctx.error(f"[control] {key}", "missing; the PD law needs kp and kd")
-    out = {"law": "pd", "target": parse_choice(ctx, "[control] target", c.get("target", "orbital"), ("orbital", "inertial", "sun")),
-           "actuator": parse_choice(ctx, "[control] actuator", c.get("actuator", "ideal"), ("ideal", "wheels")),
+    out = {"law": "pd",
+           "target": parse_choice(ctx, "[control] target", c.get("target", "orbital"), tuple(TARGETS)),
+           "actuator": parse_choice(ctx, "[control] actuator", c.get("actuator", "ideal"), ACTUATORS),
            "kp": _nonnegative(ctx, "[control] kp", c["kp"], u.N * u.m, ("control", "kp")),
            "kd": _nonnegative(ctx, "[control] kd", c["kd"], u.N * u.m * u.s, ("control", "kd")),
-           "max_torque": (_positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m, ("control", "max_torque"))
-                          if "max_torque" in c else None)}
+           "max_torque": (_positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m,
+                                    ("control", "max_torque")) if "max_torque" in c else None)}
     for key, n in (("target_q", 4), ("target_axis", 3)):
         out[key] = parse_plain_vector(ctx, f"[control] {key}", c[key], n).tolist() if key in c else None
     _checked(ctx, out, wheels)
     if out["target"] == "sun" and orbit.get("epoch") is None:
         raise ctx.error("[orbit] epoch", "missing; target = 'sun' needs the date to place the Sun (give [orbit] epoch)")
-    return out
+    return out, None
 
 
 def _bdot(ctx, c, data, orbit, wheels):
     """B-dot's settings (SI floats) of ``[control]`` ``c``, and the field it reads
-    (``[environment] magnetic_field``, checked against the epoch)."""
+    (``[environment] magnetic_field``, checked against the epoch: ``"igrf"`` or ``"dipole"``)."""
     for key in ("gain", "max_dipole"):
         if key not in c:
             raise ctx.error(f"[control] {key}", "missing; B-dot needs gain and max_dipole")
-    out = {"law": "bdot", "gain": _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T, ("control", "gain")),
-           "max_dipole": _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2, ("control", "max_dipole"))}
+    out = {"law": "bdot",
+           "gain": _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T, ("control", "gain")),
+           "max_dipole": _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2,
+                                   ("control", "max_dipole"))}
     env = data.get("environment", {})
     field = env.get("magnetic_field") if isinstance(env, dict) else None
     if field is None or field == "none":
@@ -145,11 +148,12 @@ def _bdot(ctx, c, data, orbit, wheels):
     if epoch is None:
         raise ctx.error("[orbit] epoch", f"missing; the {field} field of B-dot needs the date (give [orbit] epoch)")
     check_field_epoch(ctx, field, epoch)
-    return _checked(ctx, out, wheels)
+    return _checked(ctx, out, wheels), field
 
 
 #: the parser of each control law's ``[control]`` keys, by ``law`` (the laws of
-#: :data:`orbatt.control.LAWS`; a law without one here is refused naming ``[control] law``)
+#: :data:`orbatt.control.LAWS`; a law without one here is refused naming ``[control] law``):
+#: ``parser(ctx, table, data, orbit, wheels) -> (settings, field the law reads or None)``
 LAW_PARSERS = {"pd": _pd, "bdot": _bdot}
 
 
@@ -191,8 +195,5 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
     if potential_kind != "gravity-gradient" or orbit is None:
         raise ctx.error("[control]", f"control needs an orbit: use [potential] kind = 'gravity-gradient' with an "
                                      f"[orbit] (this scenario is {potential_kind!r})")
-    out["control"] = LAW_PARSERS[law](ctx, c, data, orbit, wheels)
-    if law == "bdot":
-        out["magnetic_field"] = parse_choice(ctx, "[environment] magnetic_field",
-                                             data["environment"]["magnetic_field"], ("igrf", "dipole"))
+    out["control"], out["magnetic_field"] = LAW_PARSERS[law](ctx, c, data, orbit, wheels)
     return out
