@@ -240,7 +240,13 @@ class PDControl:
         """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
         gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
         Sun's position (``"sun"``) for ``target = "sun"``."""
-        return self.row(wheels, tables("sun") if self.target == "sun" else None)
+        sun = tables("sun") if self.target == "sun" else None
+        key = tuple(wheels)
+        rows = self.__dict__.setdefault("_rows", {})
+        hit = rows.get(key)
+        if hit is None or hit[0] is not sun:  # made once per set of wheels and Sun table (~60 us)
+            hit = rows[key] = (sun, self.row(wheels, sun))
+        return hit[1]
 
     def describe(self):
         d = {"law": "pd", "target": self.target, "kp_N_m": self.kp, "kd_N_m_s": self.kd,

@@ -3,13 +3,14 @@
 Dataset's control variables get their model ``(terms, params, table)``
 (:mod:`orbatt.core.model`) from :func:`assemble`.
 
-Each part gives its own rows: the orbit provider its orbit row and the potential its term
-rows (:meth:`orbatt.potentials.Potential.kernel_model`, or
-:meth:`orbatt.EnvironmentTorques.model_rows`: the terms of :mod:`orbatt.terms`), the body's
-reaction wheels their extended state (:func:`orbatt.control.wheels_row`), the control law its
-row (``model_row`` of :class:`~orbatt.PDControl`, :class:`~orbatt.BDotControl`, reading the
-fields the potential sampled along the orbit); :func:`orbatt.core.model.build` packs them
-once, in that order.
+Each part gives its own rows: the potential its orbit row and term rows (its
+:meth:`~orbatt.potentials.Potential.kernel_model`, built once: the orbit provider's row and,
+for :class:`~orbatt.EnvironmentTorques`, the terms of :mod:`orbatt.terms`; unpacked by
+:func:`model_rows`), the body's reaction wheels their extended state
+(:func:`orbatt.control.wheels_row`), the control law its row (``model_row`` of
+:class:`~orbatt.PDControl`, :class:`~orbatt.BDotControl`, reading the fields the potential
+sampled along the orbit, :meth:`~orbatt.EnvironmentTorques.field_table`);
+:func:`orbatt.core.model.build` packs them once, in that order.
 """
 from __future__ import annotations
 
@@ -88,10 +89,7 @@ def assemble(potential, bodies) -> KernelSpec:
     control = getattr(potential, "control", None)
     if not wheels and control is None:
         return KernelSpec(*_potential_model(potential))
-    if hasattr(potential, "model_rows"):
-        orbit_row, rows = potential.model_rows()
-    else:
-        orbit_row, rows = model_rows(_potential_model(potential))
+    orbit_row, rows = model_rows(_potential_model(potential))
     if wheels:
         rows.append(wheels_row(wheels))
     if control is not None:

@@ -301,15 +301,9 @@ class EnvironmentTorques(Potential):
     def build_model(self):
         """The compiled model ``(terms, params, table)`` (:mod:`orbatt.core.model`): the orbit,
         then the enabled terms of :data:`orbatt.terms.TERMS` in that order (gravity gradient,
-        drag, SRP, magnetic, constant torque); built once, by :meth:`kernel_model`."""
-        orbit_row, rows = self.model_rows()
-        return km.build(orbit=orbit_row, terms=rows)
-
-    def model_rows(self):
-        """``(orbit row, term rows)``: the rows ``(kind, params, table)`` of the orbit (None
-        without one) and of the enabled terms (:data:`orbatt.terms.TERMS`), for
-        :func:`orbatt.core.model.build` (:mod:`orbatt.assembly` appends the wheels' and the
-        control law's)."""
+        drag, SRP, magnetic, constant torque), each row from its descriptor; built once, by
+        :meth:`kernel_model` (:func:`orbatt.model_assembly.assemble` appends the wheels' and the
+        control law's rows)."""
         orbit_row = None
         if self.orbit is not None:
             okind, oparams, otable = km.from_spec(self.kind, self.params, self.table)
@@ -317,7 +311,7 @@ class EnvironmentTorques(Potential):
                          otable[okind[0, km.R0]:okind[0, km.R1]] if okind[0, km.R1] > okind[0, km.R0] else None)
         rows = [term.row(self) for term in TERMS if term.enabled(self)]
         self.term_kinds = [r[0] for r in rows]
-        return orbit_row, rows
+        return km.build(orbit=orbit_row, terms=rows)
 
     @property
     def time_span(self):
