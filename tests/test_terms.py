@@ -60,19 +60,29 @@ def test_the_scenario_keys_and_their_docs_come_from_the_descriptors():
             assert k.argument in params, k  # the keyword the key becomes exists
             if k.kind == "vector":
                 assert RANGES["torques", k.key].text() == f"|x| <= {k.range[0]:g}".replace("e+", "e") + f" {k.unit}"
-    args = torque_arguments({"drag": True, "srp": False, "residual_dipole": np.array([1.0, 0.0, 0.0]),
-                             "constant": None})
-    assert args == {"drag": True, "srp": False, "residual_dipole": args["residual_dipole"], "constant_torque": None}
-    assert args["residual_dipole"].unit == u.A * u.m**2
+    given = {"drag": True, "residual_dipole": np.array([1.0, 0.0, 0.0])}
+    args = torque_arguments(given)
+    assert set(args) == {k.argument for t in terms.TERMS for k in t.keys}
+    for key, (_, k) in terms.BY_KEY.items():
+        value = args[k.argument]
+        if key not in given:
+            assert value is None
+        elif k.kind == "vector":  # a Quantity in the key's unit, the same numbers
+            assert value.unit == u.Unit(k.unit) and np.array_equal(value.value, given[key])
+        else:
+            assert value is given[key]
 
 
 def test_the_model_holds_the_enabled_terms_in_descriptor_order_and_the_fields_theirs():
     env = _env()
-    assert env.term_names == [t.name for t in terms.TERMS]
+    assert env.term_names == [t.name for t in terms.TERMS if t.enabled(env)]
+    assert env.term_names[:5] == ["gravity_gradient", "drag", "srp", "magnetic", "constant"]
     t = np.linspace(0.0, 600.0, 7)
     fields = env.fields(t)
-    assert set(fields) == set(terms.FIELD_VARIABLES)
-    for name, (dims, *_rest) in terms.FIELD_VARIABLES.items():
+    assert set(fields) == {f.name for t in terms.TERMS if t.enabled(env) for f in t.fields}
+    assert {"density", "sun_direction", "shadow", "magnetic_field"} <= set(fields)
+    for name in fields:
+        dims = terms.FIELD_VARIABLES[name][0]
         assert fields[name].shape == t.shape + tuple(3 for _ in dims)
     assert np.allclose(np.linalg.norm(fields["sun_direction"], axis=-1), 1.0, rtol=0, atol=1e-12)
     only = _env(drag=False, srp=False, residual_dipole=None, facets=())
