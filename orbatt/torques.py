@@ -31,7 +31,7 @@ from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
 from .terms import TERMS
 
-__all__ = ["Facet", "facet", "EnvironmentTorques", "TERM_NAMES", "FIELDS_SOURCE", "sample_margin"]
+__all__ = ["Facet", "facet", "EnvironmentTorques", "TERM_NAMES", "TERM_KEYWORDS", "FIELDS_SOURCE", "sample_margin"]
 
 #: where the Dataset's environment fields come from (its variables' ``source`` attribute)
 FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
@@ -73,6 +73,24 @@ def sample_margin(*, drag=False, srp=False, magnetic=False, sun=False):
     steps = [step for on, step in ((drag, DENSITY_STEP), (srp or sun, SUN_STEP), (magnetic, MAGNETIC_FIELD_STEP))
              if on]
     return max(steps, default=0.0)
+
+
+#: the keywords of :class:`EnvironmentTorques` its signature names (the terms' among them)
+_NAMED = {"gravity_gradient", "drag", "srp", "residual_dipole", "constant_torque"}
+#: the terms' keywords :class:`EnvironmentTorques` takes through ``**terms``: those of the
+#: vector keys of :data:`orbatt.terms.TERMS` its signature does not name (a new term's)
+TERM_KEYWORDS = {k.argument: k for t in TERMS for k in t.keys if k.kind == "vector" and k.argument not in _NAMED}
+_TERM_OF = {k.argument: t for t in TERMS for k in t.keys}
+
+
+def _vector_argument(spec, value):
+    """The value (3 floats in the key's unit, or None) of a term's keyword ``spec.argument``."""
+    if value is None:
+        return None
+    v = _quantity(value, u.Unit(spec.unit), spec.argument)
+    if np.shape(v) != (3,) or not np.all(np.isfinite(v)):
+        raise InputError(f"{spec.argument}: expected 3 finite values in {spec.unit}, got {value!r}")
+    return np.asarray(v, dtype=np.float64)
 
 
 class Facet:
@@ -187,6 +205,9 @@ class EnvironmentTorques(Potential):
     constant_torque : Quantity (3,) (torque), optional
         A constant body torque (body axes; thruster misalignment, outgassing): the term
         ``torque_constant``. It reads no orbit.
+    **terms : Quantity (3,), optional
+        The keyword of any other term of :data:`orbatt.terms.TERMS` (:data:`TERM_KEYWORDS`: its
+        key's ``argument``, 3 values in the key's unit; an attribute of the same name).
     """
 
     name = "environment"
@@ -194,7 +215,13 @@ class EnvironmentTorques(Potential):
 
     def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
                  residual_dipole=None, atmosphere=None, magnetic_field=None, shadow="conical", corotation=True,
-                 t_start=0.0 * u.s, control=None, constant_torque=None):
+                 t_start=0.0 * u.s, control=None, constant_torque=None, **terms):
+        for name in terms:
+            if name not in TERM_KEYWORDS:
+                raise TypeError(f"EnvironmentTorques() got an unexpected keyword argument {name!r}; the terms' "
+                                f"keywords: {', '.join(sorted(TERM_KEYWORDS)) or 'none besides the named ones'}")
+        extra = {name: _vector_argument(spec, terms.get(name)) for name, spec in TERM_KEYWORDS.items()}
+        self.__dict__.update(extra)
         const = None
         if constant_torque is not None:
             const = _quantity(constant_torque, u.N * u.m, "constant_torque")
@@ -204,10 +231,10 @@ class EnvironmentTorques(Potential):
         if orbit is None:
             needs = [n for n, on in (("gravity_gradient", gravity_gradient), ("drag", drag), ("srp", srp),
                                      ("residual_dipole", residual_dipole is not None), ("control", control is not None))
-                     if on]
+                     if on] + [n for n, v in extra.items() if v is not None and _TERM_OF[n].kind.orbit]
             if needs:
                 raise InputError(f"orbit: {needs[0]} needs an orbit provider (KeplerOrbit, ReboundOrbit, TleOrbit)")
-            if const is None:
+            if const is None and not any(v is not None for v in extra.values()):
                 raise InputError("constant_torque: without an orbit the torques need a constant_torque")
         elif not isinstance(orbit, OrbitProvider):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got {type(orbit).__name__}")
@@ -371,6 +398,9 @@ class EnvironmentTorques(Potential):
              "sampled_span_s": None if self.span is None else list(self.span)}
         if self.constant_torque is not None:
             d["constant_torque_N_m"] = self.constant_torque.tolist()
+        for name, spec in TERM_KEYWORDS.items():
+            if getattr(self, name) is not None:
+                d[f"{name}_{spec.unit.replace(' ', '_')}"] = getattr(self, name).tolist()
         if self.residual_dipole is not None:
             d["residual_dipole_A_m2"] = self.residual_dipole.tolist()
         if self.atmosphere is not None:
