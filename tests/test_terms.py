@@ -26,7 +26,7 @@ from orbatt.scenario.ranges import RANGES
 from orbatt.scenario.schema import KEY_DOCS
 from orbatt.scenario.torques_schema import TORQUE_KEYS, torque_arguments
 from orbatt.shipped import shipped_file
-from orbatt.torques import TERM_NAMES, EnvironmentTorques, Facet, facet
+from orbatt.torques import TERM_KEYWORDS, TERM_NAMES, EnvironmentTorques, Facet, facet
 
 EPOCH = Time("2025-03-20T00:00:00", scale="utc")
 ORBIT = orbatt.KeplerOrbit(6778.137 * u.km, 0.001, 51.6 * u.deg, 30 * u.deg, 0 * u.deg, epoch=EPOCH)
@@ -57,7 +57,7 @@ def test_the_scenario_keys_and_their_docs_come_from_the_descriptors():
     for t in terms.TERMS:
         for k in t.keys:
             assert KEY_DOCS["torques"][k.key] == (k.dimension, k.default, k.meaning)
-            assert k.argument in params, k  # the keyword the key becomes exists
+            assert k.argument in params or k.argument in TERM_KEYWORDS, k  # the keyword the key becomes exists
             if k.kind == "vector":
                 assert RANGES["torques", k.key].text() == f"|x| <= {k.range[0]:g}".replace("e+", "e") + f" {k.unit}"
     given = {"drag": True, "residual_dipole": np.array([1.0, 0.0, 0.0])}
@@ -71,6 +71,11 @@ def test_the_scenario_keys_and_their_docs_come_from_the_descriptors():
             assert value.unit == u.Unit(k.unit) and np.array_equal(value.value, given[key])
         else:
             assert value is given[key]
+
+
+def test_a_term_keyword_beyond_the_named_ones_is_checked():
+    with pytest.raises(TypeError, match="unexpected keyword argument 'constant_toque'"):
+        EnvironmentTorques(None, None, gravity_gradient=False, constant_toque=[0.0, 0.0, 1.0] * u.N * u.m)
 
 
 def test_the_model_holds_the_enabled_terms_in_descriptor_order_and_the_fields_theirs():
