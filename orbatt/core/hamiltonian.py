@@ -18,7 +18,7 @@ compare with.
 from __future__ import annotations
 
 from ._jit import jit, jit_inline
-from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient_at, gradient_called, gradient_lanes, orbit_at, term_constants,
+from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient_at, gradient_called, orbit_at, term_constants,
                     term_value, terms_lanes)
 from .qalg import qconj, qmul, qmul_pure
 
@@ -95,18 +95,6 @@ rhs = jit(_rhs)
 #: site per loop: every inlined site costs its type inference and lowering again)
 rhs_inline = jit_inline(_rhs)
 
-
-
-# The splitting loops' kicks call the gradient compiled once (``jit``: this and
-# :func:`orbatt.core.model.gradient_called`), not inlined at numba-IR level: every inlined
-# site repeats the type inference and lowering of the whole term dispatch, which made those
-# loops the slowest kernels of the package to compile (81 s -> 29 s for
-# ``splitting.advance``, issue 26). The call costs a few ns against the tens to hundreds of ns
-# of a gradient; the arithmetic, and so the bits, are the same.
-@jit
-def gradient_lanes_called(t, Y, nl, I, terms, params, table, work, G):
-    """:func:`orbatt.core.model.gradient_lanes`, compiled once and called (not inlined)."""
-    return gradient_lanes(t, Y, nl, I, terms, params, table, work, G)
 
 
 @jit

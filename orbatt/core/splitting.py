@@ -59,8 +59,8 @@ import numpy as np
 
 from ._jit import (DONE, EPS, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, borrow_model, jit,
                    jit_inline, jit_parallel, keepalive)
-from .hamiltonian import gradient_lanes_called, rhs, rhs_lanes
-from .model import gradient_called
+from .hamiltonian import rhs_inline, rhs_lanes
+from .model import gradient, gradient_lanes
 from .qalg import qmul
 
 # ---------------------------------------------------------------------------------------
@@ -265,7 +265,7 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, para
             gvalid = False
         elif terms.shape[0] > 1:
             if not gvalid:
-                _, gc = gradient_called(t + toff[j] * h, q, inertia, terms, params, table, work)
+                _, gc = gradient(t + toff[j] * h, q, inertia, terms, params, table, work)
                 nev += 1
                 gvalid = True
             Q = (Q[0] - tau * gc[0], Q[1] - tau * gc[1], Q[2] - tau * gc[2], Q[3] - tau * gc[3])
@@ -274,16 +274,20 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, para
 
 @jit_inline
 def _rk4_step(y, t, h, inertia, terms, params, table, work, K, ytmp):
-    """Classical RK4 step, in place on ``y`` (4 RHS evaluations into ``K (4, 8)``), calling the
-    compiled right-hand side (:func:`orbatt.core.hamiltonian.rhs`)."""
+    """Classical RK4 step, in place on ``y`` (4 RHS evaluations into ``K (4, 8)``), with one
+    inlined right-hand side (a loop over the stages, one call site: every inlined site costs
+    its type inference and lowering again)."""
     for s in range(4):
+        ts = t
         if s == 0:
-            rhs(t, y, inertia, terms, params, table, work, K[0])
+            for i in range(NDIM):
+                ytmp[i] = y[i]
         else:
             a = RK4_NODES[s]
+            ts = t + a * h
             for i in range(NDIM):
                 ytmp[i] = y[i] + a * h * K[s - 1, i]
-            rhs(t + a * h, ytmp, inertia, terms, params, table, work, K[s])
+        rhs_inline(ts, ytmp, inertia, terms, params, table, work, K[s])
     for i in range(NDIM):
         y[i] += h / 6.0 * (K[0, i] + 2.0 * (K[1, i] + K[2, i]) + K[3, i])
 
@@ -428,7 +432,7 @@ def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, terms, params
             gvalid = False
         elif terms.shape[0] > 1:
             if not gvalid:
-                gradient_lanes_called(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
+                gradient_lanes(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
                 nev += 1
                 gvalid = True
             for i in range(4):
