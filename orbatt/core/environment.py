@@ -221,9 +221,10 @@ def not_a_knot_table(t, v):
 
     The first derivatives ``s_i`` at the knots solve the tridiagonal system of scipy's
     ``CubicSpline(t, v, bc_type="not-a-knot")`` (the same rows, the same right-hand sides),
-    eliminated without pivoting (the system is diagonally dominant after its first row, whose
-    pivot ``t_2 - t_1`` the second row's elimination does not shrink); each interval is then
-    the cubic Hermite polynomial of its end values and slopes, with scipy's formulas.
+    eliminated without pivoting; each interval is then the cubic Hermite polynomial of its end
+    values and slopes, with scipy's formulas. On even steps (the environment tables) the banded
+    LU that scipy calls pivots on no row and the table is scipy's bit for bit; on uneven steps
+    the values and slopes agree to round-off (``tests/environment/test_environment_tables.py``).
 
     Parameters
     ----------
