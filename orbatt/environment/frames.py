@@ -358,14 +358,38 @@ def geodetic(t, r_gcrs_km):
     Returns
     -------
     lat_deg, lon_deg, alt_km : ndarray (N,)
-        Geodetic latitude (deg), east longitude in ``(-180, 180]`` (deg) and height above
+        Geodetic latitude (deg), east longitude in ``[-180, 180)`` (deg) and height above
         the WGS84 ellipsoid (km).
     """
-    from astropy.coordinates import EarthLocation
+    import erfa
 
     x = gcrs_to_itrs(t, r_gcrs_km)
-    loc = EarthLocation.from_geocentric(x[:, 0], x[:, 1], x[:, 2], unit=u.km)
-    lon, lat, h = loc.to_geodetic("WGS84")
-    return (np.asarray(lat.to_value(u.deg), dtype=np.float64),
-            np.asarray(lon.wrap_at(180 * u.deg).to_value(u.deg), dtype=np.float64),
-            np.asarray(h.to_value(u.km), dtype=np.float64))
+    # astropy's EarthLocation.to_geodetic("WGS84") without importing astropy.coordinates, the
+    # same operations (tests/environment/test_frames.py): ERFA's gc2gde in metres, the
+    # longitude wrapped to [0, 2 pi) rad, then to (-180, 180] deg, as astropy's Longitude does
+    lon, lat, h = erfa.gc2gde(WGS84_A_M, WGS84_F, x * 1000.0)
+    lon = _wrap(_wrap(lon, _RAD_360, _RAD_360) * _DEG_PER_RAD, 180.0, 360.0)
+    return (np.asarray(lat * _DEG_PER_RAD, dtype=np.float64), np.asarray(lon, dtype=np.float64),
+            np.asarray(h * 0.001, dtype=np.float64))
+
+
+#: WGS84 ellipsoid: equatorial radius (m) and flattening, astropy's and ERFA's values
+WGS84_A_M = 6378137.0
+WGS84_F = 1.0 / 298.257223563
+#: astropy's unit scales: rad -> deg, and 360 deg in rad
+_DEG_PER_RAD = 57.29577951308232
+_RAD_360 = 360.0 * 0.017453292519943295
+
+
+def _wrap(angle, wrap_angle, full):
+    """Angles wrapped into ``[wrap_angle - full, wrap_angle)``: astropy's ``Angle.wrap_at``
+    arithmetic (the same bits)."""
+    floor = wrap_angle - full
+    out = np.array(angle, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        wraps = (out - floor) // full
+    if np.any(np.isfinite(wraps) & (wraps != 0)):
+        out -= wraps * full
+        out[out >= wrap_angle] -= full
+        out[out < floor] += full
+    return out

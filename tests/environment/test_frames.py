@@ -78,6 +78,25 @@ def test_erfa_rotation_is_astropys_transform():
                                atol=1e-15)
 
 
+def test_geodetic_is_astropys_to_geodetic_bit_for_bit():
+    """frames.geodetic calls ERFA directly (no astropy.coordinates import, issue 25) with the
+    operations of EarthLocation.to_geodetic("WGS84") and Longitude.wrap_at(180 deg)."""
+    rng = np.random.default_rng(5)
+    r = rng.normal(size=(3000, 3))
+    r *= rng.uniform(6300.0, 42000.0, (3000, 1)) / np.linalg.norm(r, axis=1)[:, None]
+    r[:4, 1] = 0.0                  # on the 0 / 180 deg meridians
+    r[:2, 0] = -7000.0
+    t = Time("2025-03-20T00:00:00", scale="utc") + np.linspace(0.0, 86400.0, 3000) * u.s
+    lat, lon, alt = frames.geodetic(t, r)
+    x = frames.gcrs_to_itrs(t, r)
+    loc = EarthLocation.from_geocentric(x[:, 0], x[:, 1], x[:, 2], unit=u.km)
+    lon_ref, lat_ref, h_ref = loc.to_geodetic("WGS84")
+    np.testing.assert_array_equal(lat, lat_ref.to_value(u.deg))
+    np.testing.assert_array_equal(lon, lon_ref.wrap_at(180 * u.deg).to_value(u.deg))
+    np.testing.assert_array_equal(alt, h_ref.to_value(u.km))
+    assert np.all((lon >= -180.0) & (lon < 180.0))
+
+
 @pytest.mark.parametrize("span_days, n", [(1.0, 4321), (30.0, 20000), (0.01, 200)])
 def test_interpolated_precession_nutation_is_erfas(span_days, n):
     """Many instants: the bias-precession-nutation matrix from nodes every 10 minutes agrees
