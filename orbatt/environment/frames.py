@@ -366,7 +366,7 @@ def geodetic(t, r_gcrs_km):
     x = gcrs_to_itrs(t, r_gcrs_km)
     # astropy's EarthLocation.to_geodetic("WGS84") without importing astropy.coordinates, the
     # same operations (tests/environment/test_frames.py): ERFA's gc2gde in metres, the
-    # longitude wrapped to [0, 2 pi) rad, then to (-180, 180] deg, as astropy's Longitude does
+    # longitude wrapped to [0, 2 pi) rad, then to [-180, 180) deg, as astropy's Longitude does
     lon, lat, h = erfa.gc2gde(WGS84_A_M, WGS84_F, x * 1000.0)
     lon = _wrap(_wrap(lon, _RAD_360, _RAD_360) * _DEG_PER_RAD, 180.0, 360.0)
     return (np.asarray(lat * _DEG_PER_RAD, dtype=np.float64), np.asarray(lon, dtype=np.float64),
