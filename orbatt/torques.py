@@ -25,6 +25,7 @@ from .core import model as km
 from .core.kinds import BY_NAME
 from .core import potentials as kp
 from .environment import sun as esun
+from .environment.atmosphere import ExponentialAtmosphere
 from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
 from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sample_along_orbit, tabulate
 from .control import BDotControl, PDControl
@@ -36,7 +37,7 @@ __all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "FIELDS_SOURCE", "sample
 
 #: where the Dataset's environment fields come from (its variables' ``source`` attribute)
 FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
-                 "interpolated; docs/design.md §10)")
+                 "interpolated; docs/design.md §10), or the closed form the kernel evaluates (exponential atmosphere)")
 #: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
 TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
 _AREA = u.m**2
@@ -281,12 +282,16 @@ class EnvironmentTorques(Potential):
         if self.gravity_gradient:
             rows.append((km.GRAVITY_GRADIENT, [gm], None))
         if self.drag:
-            s = self._samples(DENSITY_STEP)
-            dens = tabulate(s, self.atmosphere.density) * 1.0
-            dens[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
-            self._field_tables["density"] = dens
             F = np.array([f.row(f.drag_coefficient * f.area.to_value(u.km**2)) for f in self.facets])
-            rows.append((km.DRAG, km.drag_params(F, EARTH_ROTATION_RATE if self.corotation else 0.0), dens))
+            omega = EARTH_ROTATION_RATE if self.corotation else 0.0
+            if isinstance(self.atmosphere, ExponentialAtmosphere):  # closed form in the kernel, no table
+                rho0, h0, H, R = self.atmosphere.kernel_params()
+                rows.append((km.DRAG, km.drag_params(F, omega, (rho0 * 1e9, h0, H, R)), None))  # kg km^-3, km
+            else:
+                dens = tabulate(self._samples(DENSITY_STEP), self.atmosphere.density) * 1.0
+                dens[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
+                self._field_tables["density"] = dens
+                rows.append((km.DRAG, km.drag_params(F, omega), dens))
         if self.srp:
             s = self._samples(SUN_STEP)
             sun = tabulate(s, lambda t, r: esun.sun_position(t))
