@@ -6,7 +6,9 @@
 For each scenario, ``orbatt run SCENARIO -o TMP --quiet`` in a fresh process (``python -m
 orbatt.cli``), warm: one run first with ``ORBATT_COLD_START=compile`` fills numba's cache and the
 Earth-orientation cache, then the median (and min, max) wall time of ``--repeats`` runs, each a
-new process; and the import of ``orbatt.cli`` alone. With ``--baseline TREE`` the same
+new process; and the import of ``orbatt.cli`` alone. The last column is the integration's share
+of the wall time: the file's ``integration_stats`` ``wall_time_s`` (the compiled loop) over the
+process's wall time, median over the runs. With ``--baseline TREE`` the same
 commands run, interleaved run by run, with ``TREE``'s ``orbatt`` package first on
 ``PYTHONPATH`` (another checkout, e.g. ``main``), and the table shows the ratio. Interleaving
 keeps the two columns comparable on a loaded machine; compare medians, not single runs.
@@ -45,6 +47,16 @@ def wall(argv, env, cwd):
     return time.perf_counter() - t0
 
 
+def integration_time(path):
+    """``wall_time_s`` of the file's ``integration_stats`` (the compiled loop's time)."""
+    import json
+
+    import netCDF4
+
+    with netCDF4.Dataset(path) as f:
+        return float(json.loads(f.getncattr("integration_stats"))["wall_time_s"])
+
+
 def import_argv(tree):
     env = dict(os.environ)
     if tree is not None:
@@ -62,6 +74,7 @@ def main():
     if args.baseline:
         trees["baseline"] = Path(args.baseline).resolve()
     times = {(name, s): [] for name in trees for s in [*args.scenarios, "import orbatt.cli"]}
+    share = {s: [] for s in args.scenarios}
     with tempfile.TemporaryDirectory() as tmp:
         out = str(Path(tmp) / "x.nc")
         for s in args.scenarios:            # warm: compiled kernels cached, stamps written
@@ -74,10 +87,13 @@ def main():
                 for name, tree in trees.items():
                     argv, env = import_argv(tree) if s.startswith("import") else command(tree, s, out)
                     times[name, s].append(wall(argv, env, tmp))
+                    if name == "this" and not s.startswith("import"):
+                        share[s].append(integration_time(out) / times[name, s][-1])
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"orbatt run, warm, wall time of a fresh process (s): median [min, max] of {args.repeats}; "
           f"{os.cpu_count()} CPUs, load average {load:.1f}")
-    head = f"{'':28s}" + "".join(f"{name:>26s}" for name in trees) + ("   this / baseline" if len(trees) > 1 else "")
+    head = (f"{'':28s}" + "".join(f"{name:>26s}" for name in trees) + ("   this / baseline" if len(trees) > 1 else "")
+            + "   integration share (this)")
     print(head)
     for s in [*args.scenarios, "import orbatt.cli"]:
         row = f"{s:28s}"
@@ -87,7 +103,9 @@ def main():
             med[name] = statistics.median(v)
             row += f"{med[name]:12.2f} [{min(v):5.2f}, {max(v):5.2f}]"
         if len(trees) > 1:
-            row += f"   {med['this'] / med['baseline']:8.2f}"
+            row += f"   {med['this'] / med['baseline']:15.2f}"
+        if s in share:
+            row += f"   {statistics.median(share[s]):20.0%}"
         print(row)
 
 
