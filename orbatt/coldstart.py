@@ -77,10 +77,20 @@ def stamp_folder() -> Path:
     return cache_folder()
 
 
+_FINGERPRINT = None
+
+
 def fingerprint() -> dict:
     """What numba's cache of the kernels depends on: the package's source files (path,
     modification time, size: numba's own test), the versions of orbatt, numba and Python, and
-    the machine."""
+    the machine. Computed once per process (a warm run asks twice: before and after)."""
+    global _FINGERPRINT
+    if _FINGERPRINT is None:
+        _FINGERPRINT = _compute_fingerprint()
+    return dict(_FINGERPRINT)
+
+
+def _compute_fingerprint() -> dict:
     from importlib.metadata import PackageNotFoundError, version
 
     h = hashlib.sha1()
