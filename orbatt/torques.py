@@ -20,6 +20,7 @@ import numpy as np
 from astropy import units as u
 
 from . import units as U
+from .core import evaluation as kev
 from .core import model as km
 from .core import potentials as kp
 from .core.kinds import BY_NAME
@@ -366,7 +367,7 @@ class EnvironmentTorques(Potential):
         (s) and attitudes ``q (N, 4)``."""
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
         t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        _, tau = km.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+        _, tau = kev.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
         return tau
 
     def fields(self, t):

@@ -18,8 +18,9 @@ compare with.
 from __future__ import annotations
 
 from ._jit import jit, jit_inline
-from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient_at, gradient_called, orbit_at, term_constants,
+from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient_at, orbit_at, term_constants,
                     term_value, terms_lanes)
+from .evaluation import gradient_called
 from .qalg import qconj, qmul, qmul_pure
 
 

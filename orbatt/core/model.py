@@ -52,7 +52,7 @@ place of ``t`` and return ``dy/dE = dt/dE dy/dt`` with ``dt/dE = (1 - e cos E) /
 (:func:`orbatt.core.kepler.kepler_anomaly`), with no Kepler solve, and the terms that read the
 time get ``t(E) = (E - e sin E - M0) / n``. The Python drivers map the output times to
 anomalies once (``orbatt.methods.dop853``). The evaluation kernels (:func:`gradient`,
-:func:`evaluate_many`) take the time, with the Keplerian kind.
+:mod:`orbatt.core.evaluation`) take the time, with the Keplerian kind.
 
 The older kernel specification of a potential, ``(kind, params, table)`` with the kinds of
 :mod:`orbatt.core.potentials`, converts with :func:`from_spec`.
@@ -327,12 +327,6 @@ def gradient(t, q, inertia, terms, params, table, work):
 
 
 
-@jit
-def gradient_called(t, q, inertia, terms, params, table, work):
-    """:func:`gradient` compiled once and called, not inlined: for the cold call sites (every
-    inlined site repeats the type inference and lowering of the whole term dispatch)."""
-    return gradient(t, q, inertia, terms, params, table, work)
-
 @jit_inline
 def gradient_at(s, q, inertia, terms, params, table, work):
     """``(dt/ds, U, G)``: the total potential and generalized gradient of all terms at the step
@@ -392,111 +386,6 @@ def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
     r, xhat, v = orbit_radial(t, terms, params, table, work)
     terms_lanes(t, Y, nl, I, terms, params, table, work, r, xhat, v, G)
     return True
-
-
-@jit
-def evaluate_terms(t, q, inertia, terms, params, table, work):
-    """Each term alone: ``U (N, n)`` and the body torque ``tau (N, n, 3)`` of the ``n`` terms
-    at the times ``t (N,)`` and attitudes ``q (N, 4)`` (for the per-term outputs of a
-    result; ``tau = -1/2 Im(q~ G)``)."""
-    n = q.shape[0]
-    nt = terms.shape[0] - 1
-    U = np.zeros((n, nt))
-    tau = np.zeros((n, nt, 3))
-    inertia_t = (inertia[0], inertia[1], inertia[2])
-    if nt == 0:
-        return U, tau
-    for i in range(n):
-        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
-        for j in range(1, nt + 1):
-            kind, p0, c = term_constants(j, t[i], terms, params, table, work, r, xhat, v)
-            u, g = term_value(kind, p0, c, qi, inertia_t, params)
-            U[i, j - 1] = u
-            tq = pot.torque_from_gradient(qi, g)
-            for k in range(3):
-                tau[i, j - 1, k] = tq[k]
-    return U, tau
-
-
-@jit
-def evaluate_many(t, q, inertia, terms, params, table, work):
-    """``U (N,)``, ``G (N, 4)`` and the body torque ``tau (N, 3)`` of the model at the times
-    ``t (N,)`` and attitudes ``q (N, 4)``."""
-    n = q.shape[0]
-    U = np.empty(n)
-    grad = np.empty((n, 4))
-    tau = np.empty((n, 3))
-    inertia_t = (inertia[0], inertia[1], inertia[2])
-    for i in range(n):
-        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        u, g = gradient_called(t[i], qi, inertia_t, terms, params, table, work)
-        U[i] = u
-        tq = pot.torque_from_gradient(qi, g)
-        for k in range(4):
-            grad[i, k] = g[k]
-        for k in range(3):
-            tau[i, k] = tq[k]
-    return U, grad, tau
-
-
-@jit
-def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
-    """Ensemble members each as alone: ``U (E, N)`` (:func:`evaluate_many`) and (``want_tau``)
-    the torques ``tau (E, N, n, 3)`` of the ``n`` terms (``per_term``, :func:`evaluate_terms`)
-    or their total (``n = 1``), at the times ``t (N,)`` and attitudes ``q (E, N, 4)`` of members
-    of moments ``inertia (E, 3)``. The orbit and the terms' constants are computed once, from
-    fresh scratch over the times in order, as the one-member kernels compute them for each
-    member: each member gets their numbers (summed as :func:`terms_at` sums)."""
-    n_members = q.shape[0]
-    n = t.shape[0]
-    nt = terms.shape[0] - 1
-    U = np.empty((n_members, n))
-    tau = np.empty((n_members, n, nt if per_term else 1, 3))
-    if nt == 0:  # no term: the one-member kernels' zeros, member by member
-        for e in range(n_members):
-            u, _, total = evaluate_many(t, q[e], inertia[e], terms, params, table, np.full(pot.WORK_SIZE, np.nan))
-            U[e] = u
-            if want_tau and not per_term:
-                tau[e, :, 0] = total
-        return U, tau
-    kinds = np.empty(nt, dtype=np.int64)
-    starts = np.empty(nt, dtype=np.int64)
-    consts = np.empty((n, nt, 4))
-    work = np.full(pot.WORK_SIZE, np.nan)
-    for i in range(n):
-        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
-        for j in range(nt):
-            kind, p0, c = term_constants(j + 1, t[i], terms, params, table, work, r, xhat, v)
-            kinds[j] = kind
-            starts[j] = p0
-            for k in range(4):
-                consts[i, j, k] = c[k]
-    for e in range(n_members):
-        inertia_t = (inertia[e, 0], inertia[e, 1], inertia[e, 2])
-        for i in range(n):
-            qi = (q[e, i, 0], q[e, i, 1], q[e, i, 2], q[e, i, 3])
-            u_sum = 0.0
-            g_sum = (0.0, 0.0, 0.0, 0.0)
-            for j in range(nt):
-                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3])
-                u, g = term_value(kinds[j], starts[j], c, qi, inertia_t, params)
-                if j == 0:  # as terms_at: the sum starts from the first term's value
-                    u_sum = u
-                    g_sum = g
-                else:
-                    u_sum += u
-                    g_sum = (g_sum[0] + g[0], g_sum[1] + g[1], g_sum[2] + g[2], g_sum[3] + g[3])
-                if want_tau and per_term:
-                    tq = pot.torque_from_gradient(qi, g)
-                    for k in range(3):
-                        tau[e, i, j, k] = tq[k]
-            U[e, i] = u_sum
-            if want_tau and not per_term:
-                tq = pot.torque_from_gradient(qi, g_sum)
-                for k in range(3):
-                    tau[e, i, 0, k] = tq[k]
-    return U, tau
 
 
 # ---------------------------------------------------------------------------------------
