@@ -348,7 +348,8 @@ def sweep_global_attrs(ds, sweep, stats, run):
         attrs["binary"] = json.dumps(describe(binary))
     attrs.update(global_attrs(
         method=sc.method, settings={"method": sc.method, **sc.settings}, stats=json.dumps(stats, sort_keys=True),
-        potential=potential_attr(binary) if binary is not None else sc.potential, dimensionless=sc.spec.dimensionless, orbit=orbit,
+        potential=potential_attr(binary) if binary is not None else sc.potential,
+        dimensionless=sc.spec.dimensionless, orbit=orbit,
         epoch=None if orbit is None else orbit.epoch, scenario_text=sc.text,
         title=f"orbatt sweep: {sc.name} ({sweep.cases} cases)",
         action=f"sweep of {sweep.cases} cases ({run.get('scheduler')})",

@@ -4,6 +4,7 @@ the secondary's mass, inertia, the initial separation and an impulse vary by the
 bad paths and outputs are refused naming them; the per-case outputs hold the physics."""
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -103,6 +104,22 @@ def test_dask_workers_give_the_same_bits(swept):
     for name in ds.data_vars:
         assert np.array_equal(on_dask[name].values, ds[name].values, equal_nan=True), name
     assert '"scheduler": "local cluster"' in on_dask.attrs["sweep_run"]
+
+
+def test_an_interrupted_binary_sweep_resumes(swept, tmp_path):
+    sw, ds = swept
+    out = tmp_path / "b.nc"
+    run_sweep(sw, out, scheduler="synchronous", chunk_size=3, keep_parts=True).close()
+    parts = sorted((tmp_path / "b.nc.parts").glob("cases-*.nc"))
+    assert len(parts) == 3
+    out.unlink()
+    parts[1].unlink()  # as if interrupted with one chunk missing
+    again = run_sweep(sw, out, scheduler="synchronous", chunk_size=3, resume=True)
+    run = json.loads(again.attrs["sweep_run"])
+    assert run["chunks_reused"] == 2 and run["chunks_computed"] == 1
+    for name in ds.data_vars:
+        assert np.array_equal(again[name].values, ds[name].values, equal_nan=True), name
+    again.close()
 
 
 def test_a_stronger_retrograde_kick_shortens_the_orbit():
