@@ -11,6 +11,7 @@ keys by path.
 """
 from __future__ import annotations
 
+from .paths import ALIAS_PATHS
 from .sweep_schema import PARAMETERS, parse_sweep_table
 
 __all__ = ["BINARY_OUTPUTS", "BINARY_DEFAULT_OUTPUTS", "BINARY_SWEEP_KEYS", "parse_binary_sweep"]
@@ -27,11 +28,7 @@ BINARY_OUTPUTS = {
 BINARY_DEFAULT_OUTPUTS = tuple(BINARY_OUTPUTS)
 #: the keys of [sweep] a binary takes
 BINARY_SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "on_invalid")
-#: the named parameters as binary scenario paths (for the message refusing them)
-_NAMED_AS_PATH = {"inertia1": "body.inertia[0]", "inertia2": "body.inertia[1]", "inertia3": "body.inertia[2]",
-                  "omega1": "initial.omega[0]", "omega2": "initial.omega[1]", "omega3": "initial.omega[2]",
-                  "orbit_a": "orbit.a", "orbit_e": "orbit.e", "orbit_i": "orbit.i", "orbit_raan": "orbit.raan",
-                  "orbit_argp": "orbit.argp", "orbit_true_anomaly": "orbit.true_anomaly"}
+
 
 
 def parse_binary_sweep(ctx, table, data, potential_kind="coupled"):
@@ -67,7 +64,7 @@ def parse_binary_sweep(ctx, table, data, potential_kind="coupled"):
     raw = table.get("parameters")
     for name in raw if isinstance(raw, dict) else ():
         if name in PARAMETERS:
-            alt = _NAMED_AS_PATH.get(name)
+            alt = ALIAS_PATHS.get(name)
             fix = f'give it by its path, "{alt}"' if alt else 'vary the keys of [initial] by their paths ("initial.q[1]")'
             raise ctx.error(f"[sweep.parameters] {name}", f"the named parameters are those of a single body; in a "
                                                           f"binary scenario {fix}")
