@@ -37,6 +37,7 @@ from .core import environment as kenv
 from .core import model as km
 from .core.kinds import BY_CODE, TermKind
 from .environment import sun as esun
+from .environment.atmosphere import ExponentialAtmosphere
 from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
 
 __all__ = ["TomlKey", "FieldVar", "Term", "TERMS", "BY_KEY", "FIELD_VARIABLES", "SHADOW_CODES", "torque_key_docs",
@@ -130,7 +131,11 @@ def _gravity_gradient_row(tq):
 
 def _drag_row(tq):
     F = np.array([f.row(f.drag_coefficient * f.area.to_value(u.km**2)) for f in tq.facets])
-    return (km.DRAG, km.drag_params(F, EARTH_ROTATION_RATE if tq.corotation else 0.0), tq.field_table("density"))
+    omega = EARTH_ROTATION_RATE if tq.corotation else 0.0
+    if isinstance(tq.atmosphere, ExponentialAtmosphere):  # closed form in the kernel (issue 25), no table
+        rho0, h0, H, R = tq.atmosphere.kernel_params()
+        return (km.DRAG, km.drag_params(F, omega, (rho0 * 1e9, h0, H, R)), None)  # kg km^-3, km
+    return (km.DRAG, km.drag_params(F, omega), tq.field_table("density"))
 
 
 def _srp_row(tq):

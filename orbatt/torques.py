@@ -35,7 +35,7 @@ __all__ = ["Facet", "facet", "EnvironmentTorques", "TERM_NAMES", "TERM_KEYWORDS"
 
 #: where the Dataset's environment fields come from (its variables' ``source`` attribute)
 FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
-                 "interpolated; docs/design.md §10)")
+                 "interpolated; docs/design.md §10), or the closed form the kernel evaluates (exponential atmosphere)")
 #: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
 TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
 _AREA = u.m**2

@@ -110,8 +110,11 @@ TABLE_TERMS = codes_where("table")
 #: the first slot of ``work`` given to tables (0..2: Kepler's warm start, 3: the sampled
 #: orbit); :data:`orbatt.core.potentials.WORK_SIZE` bounds the number of table terms
 FIRST_TABLE_SLOT = 4
-#: parameters of a drag term before its facets: ``[omega, nfacets]``
-DRAG_HEADER = 2
+#: parameters of a drag term before its facets: ``[omega, nfacets, density model, rho0, h0, H, R]``
+DRAG_HEADER = 7
+#: density models of the drag term: its table (a spline), or the exponential atmosphere in
+#: closed form (``rho0 exp(-(r - R - h0) / H)``, no table)
+DENSITY_TABLE, DENSITY_EXPONENTIAL = 0, 1
 #: parameters of an SRP term before its facets: ``[P1AU, AU, shadow, R_body, R_sun, nfacets]``
 SRP_HEADER = 6
 #: shadow models of the SRP term
@@ -237,7 +240,8 @@ def term_constants(j, t, terms, params, table, work, r, xhat, v):
     constants it needs at time ``t`` (read once per evaluation, outside any loop over
     members): gravity gradient ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``, drag
     ``(1/2 rho |v|^2, v^)``, SRP ``(P, s^)``, magnetic ``B`` (inertial). The environment
-    fields come from the term's spline table (:func:`orbatt.core.environment.spline_eval`)."""
+    fields come from the term's spline table (:func:`orbatt.core.environment.spline_eval`),
+    an exponential atmosphere's density from its formula at ``r``."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
     if kind == GRAVITY_GRADIENT:
@@ -256,7 +260,11 @@ def _environment_constants(kind, t, tab, slot, work, params, p0, r, xhat, v):
     and called (not inlined: inlining them into every step loop multiplied the compile time
     of every run, which mostly does not use them)."""
     if kind == DRAG:
-        return _drag_constants(env.spline_eval(tab, t, 1, slot, work)[0], params, p0, r, xhat, v)
+        if params[p0 + 2] == DENSITY_EXPONENTIAL:
+            rho = params[p0 + 3] * math.exp(-((r - params[p0 + 6]) - params[p0 + 4]) / params[p0 + 5])
+        else:
+            rho = env.spline_eval(tab, t, 1, slot, work)[0]
+        return _drag_constants(rho, params, p0, r, xhat, v)
     elif kind == SRP:
         return _srp_constants(env.spline_eval(tab, t, 3, slot, work), params, p0, r, xhat)
     b = env.spline_eval(tab, t, 3, slot, work)
@@ -317,6 +325,13 @@ def gradient(t, q, inertia, terms, params, table, work):
     _, U, G = gradient_at(t, q, inertia, terms, params, table, work)
     return U, G
 
+
+
+@jit
+def gradient_called(t, q, inertia, terms, params, table, work):
+    """:func:`gradient` compiled once and called, not inlined: for the cold call sites (every
+    inlined site repeats the type inference and lowering of the whole term dispatch)."""
+    return gradient(t, q, inertia, terms, params, table, work)
 
 @jit_inline
 def gradient_at(s, q, inertia, terms, params, table, work):
@@ -415,7 +430,7 @@ def evaluate_many(t, q, inertia, terms, params, table, work):
     inertia_t = (inertia[0], inertia[1], inertia[2])
     for i in range(n):
         qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        u, g = gradient(t[i], qi, inertia_t, terms, params, table, work)
+        u, g = gradient_called(t[i], qi, inertia_t, terms, params, table, work)
         U[i] = u
         tq = pot.torque_from_gradient(qi, g)
         for k in range(4):
@@ -534,8 +549,9 @@ def build(orbit=None, terms=()):
     if sum(1 for k in spec[1:, KIND] if k == WHEELS) > 1:
         raise ValueError("at most one row of reaction wheels")
     slot = FIRST_TABLE_SLOT
-    for row in spec[1:]:
-        if int(row[KIND]) in TABLE_TERMS or (int(row[KIND]) == PD_CONTROL and row[R1] > row[R0]):
+    for row in spec[1:]:  # a PD law's table is optional, a drag term's too with a closed-form density
+        optional = int(row[KIND]) == PD_CONTROL or (int(row[KIND]) == DRAG and params[row[P0] + 2] != DENSITY_TABLE)
+        if (int(row[KIND]) in TABLE_TERMS and not optional) or (optional and row[R1] > row[R0]):
             if row[R1] - row[R0] < 2:
                 raise ValueError(f"term kind {int(row[KIND])} needs a spline table of at least 2 rows")
             if slot >= pot.WORK_SIZE:
@@ -545,13 +561,16 @@ def build(orbit=None, terms=()):
     return spec, params, table
 
 
-def drag_params(facets, omega):
+def drag_params(facets, omega, exponential=None):
     """The parameters of a :data:`DRAG` term: the atmosphere's rotation rate ``omega`` (rad per
-    time unit about inertial axis 3; 0: a still atmosphere) and the facets
-    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). Its table:
-    the density along the orbit (one component; kg per volume unit)."""
+    time unit about inertial axis 3; 0: a still atmosphere), the density model and the facets
+    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). ``exponential``
+    None: the density is the term's table (one component, kg per volume unit, along the
+    orbit); else ``(rho0, h0, H, R)``, the exponential atmosphere in closed form (kg per volume
+    unit, lengths; ``h = |r| - R``) and no table."""
     facets = np.asarray(facets, dtype=np.float64).reshape(-1, trq.FACET_SIZE)
-    return np.concatenate([[omega, facets.shape[0]], facets.ravel()])
+    model = [DENSITY_TABLE, 0.0, 0.0, 1.0, 0.0] if exponential is None else [DENSITY_EXPONENTIAL, *exponential]
+    return np.concatenate([[omega, facets.shape[0]], np.asarray(model, dtype=np.float64), facets.ravel()])
 
 
 def srp_params(facets, pressure_1au, au, shadow, body_radius, sun_radius):
