@@ -34,7 +34,7 @@ from ..dataset.timeaxis import cf_time_attrs, elapsed_attrs
 from ..units import INTERNAL_UNITS as UN
 from .system import osculating_elements
 
-__all__ = ["binary_content", "binary_dataset"]
+__all__ = ["binary_content", "binary_dataset", "describe", "potential_attr"]
 
 _MAPS = "x_S = q x_B q~ (maps body to space components)"
 
@@ -52,6 +52,11 @@ def describe(system):
             "primary_mass_kg": system.primary_mass,
             "primary_inertia_kg_km2": None if system.primary_inertia is None else system.primary_inertia.tolist(),
             "G_km3_kg-1_s-2": system.G}
+
+
+def potential_attr(system):
+    """The ``potential`` global attribute of a binary's results (a run's, a sweep's)."""
+    return {"kind": f"mutual potential to second order ({system.potential})"}
 
 
 def binary_content(traj, *, scenario_text=None, title=None) -> Content:
@@ -124,7 +129,7 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
         "qQ": _var(td, qQ, UN["momentum"], "constraint residual q.Q (secondary)"),
     })
     attrs = global_attrs(method=traj.method, settings=traj.settings, stats=traj.stats,
-                         potential={"kind": f"mutual potential to second order ({s.potential})"},
+                         potential=potential_attr(s),
                          dimensionless=False, complete=traj.complete, scenario_text=scenario_text,
                          title=title or "orbatt: binary asteroid (coupled orbit and attitudes)",
                          binary=json.dumps(describe(s)))

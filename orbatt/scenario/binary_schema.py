@@ -21,7 +21,10 @@ not listed are refused; quantities carry units, dimensional scenarios only)::
                   (dividing output_step and the impulse times), composition = "strang" |
                   "yoshida4" (default) | "suzuki4" | "mclachlan4" | "yoshida6" | "kahanli6"
 
-Refused with a coupled orbit (until asked for): [torques], [environment], [control], [sweep],
+    [sweep]       scenario keys varied by their paths, run by ``orbatt sweep``
+                  (:mod:`orbatt.scenario.binary_sweep_schema`; ``orbatt run`` runs the nominal case)
+
+Refused with a coupled orbit (until asked for): [torques], [environment], [control],
 [[body.facets]], [[body.wheels]]. ``[primary]`` without ``provider = "coupled"`` is refused.
 """
 from __future__ import annotations
@@ -34,6 +37,7 @@ import numpy as np
 from .. import units as U
 from ..body import check_triangle
 from ..errors import InputError
+from .binary_sweep_schema import parse_binary_sweep
 from .fields import parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
 
 __all__ = ["BinarySpec", "is_binary", "parse_binary", "BINARY_TABLES", "BINARY_METHODS", "BINARY_POTENTIALS"]
@@ -68,7 +72,7 @@ class BinarySpec:
     integration: dict
     primary: dict | None = None
     dimensionless: bool = False
-    sweep: None = None
+    sweep: object = None  # the [sweep] table (a SweepSpec), if any
     impulses: list = field(default_factory=list)
 
 
@@ -139,9 +143,9 @@ def parse_binary(ctx, data, text, source):
         raise ctx.error("[primary]", "only used with [orbit] provider = 'coupled' (the orbit integrated with the "
                                      "attitudes); set provider = 'coupled' or remove [primary]")
     for key in data:
-        if key in ("name", "description") or key in BINARY_TABLES:
+        if key in ("name", "description", "sweep") or key in BINARY_TABLES:
             continue
-        if key in ("torques", "environment", "control", "sweep"):
+        if key in ("torques", "environment", "control"):
             raise ctx.error(f"[{key}]", "not supported with [orbit] provider = 'coupled' yet (refused until asked "
                                         "for); remove it")
         raise ctx.error(key, f"unknown table or key; allowed: {', '.join(sorted(BINARY_TABLES))}, name, description")
@@ -207,9 +211,10 @@ def parse_binary(ctx, data, text, source):
     desc = data.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):
         raise ctx.error("name/description", "must be strings")
+    sweep = parse_binary_sweep(ctx, data["sweep"], data, kind) if "sweep" in data else None
     return BinarySpec(name=name, description=desc, text=text, mass=mass, inertia=inertia, primary_mass=primary_mass,
                       potential_kind=kind, initial=initial, orbit=orb, integration=integ, primary=primary,
-                      impulses=impulses)
+                      impulses=impulses, sweep=sweep)
 
 
 def _parse_relative_orbit(ctx, o):

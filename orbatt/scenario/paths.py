@@ -13,7 +13,15 @@ import copy
 import math
 import re
 
-__all__ = ["PATH_PATTERN", "split_path", "resolve", "substitute", "toml_text", "coordinate_name", "leaf_quantity"]
+__all__ = ["ALIAS_PATHS", "PATH_PATTERN", "split_path", "resolve", "substitute", "toml_text", "coordinate_name",
+           "leaf_quantity"]
+
+#: the named parameters as scenario paths (their values are in internal units)
+ALIAS_PATHS = {"inertia1": "body.inertia[0]", "inertia2": "body.inertia[1]", "inertia3": "body.inertia[2]",
+               "omega1": "initial.omega[0]", "omega2": "initial.omega[1]", "omega3": "initial.omega[2]",
+               "orbit_a": "orbit.a", "orbit_e": "orbit.e", "orbit_i": "orbit.i", "orbit_raan": "orbit.raan",
+               "orbit_argp": "orbit.argp", "orbit_true_anomaly": "orbit.true_anomaly",
+               "orbit_mean_anomaly": "orbit.mean_anomaly"}
 
 #: a path: dotted keys, each optionally followed by one ``[index]``
 PATH_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_-]*(\[\d+\])?)*$")

@@ -45,7 +45,10 @@ seed                plain integer           drawn and recorded                  
 chunk_size          plain integer           automatic                                          cases per task
 outputs             list                    ['final_state', 'max_pointing_error', 'tumbling']  per-case outputs, of 'trajectory',
                                                                                                'final_state', 'max_pointing_error',
-                                                                                               'tumbling', 'final_energy_error'
+                                                                                               'tumbling', 'final_energy_error'; a
+                                                                                               binary asteroid's: 'final_state',
+                                                                                               'final_orbit', 'conservation',
+                                                                                               'max_libration' (all by default)
 pointing_axis       plain, 3 values         none: the whole attitude                           body axis whose pointing error is
                                                                                                measured (without it: the rotation angle
                                                                                                of the attitude from the reference)

@@ -24,16 +24,10 @@ from .. import units as U
 from ..body import RigidBody
 from ..scenario import FieldContext, Scenario, parse
 from ..scenario.build import build_initial_state
-from ..scenario.paths import substitute, toml_text
+from ..scenario.paths import ALIAS_PATHS, substitute, toml_text
 
 __all__ = ["ALIAS_PATHS", "case_data", "case_text", "state_only", "path_groups"]
 
-#: the named parameters as scenario paths (their values are in internal units)
-ALIAS_PATHS = {"inertia1": "body.inertia[0]", "inertia2": "body.inertia[1]", "inertia3": "body.inertia[2]",
-               "omega1": "initial.omega[0]", "omega2": "initial.omega[1]", "omega3": "initial.omega[2]",
-               "orbit_a": "orbit.a", "orbit_e": "orbit.e", "orbit_i": "orbit.i", "orbit_raan": "orbit.raan",
-               "orbit_argp": "orbit.argp", "orbit_true_anomaly": "orbit.true_anomaly",
-               "orbit_mean_anomaly": "orbit.mean_anomaly"}
 
 
 def _alias_unit(name, dimensionless):

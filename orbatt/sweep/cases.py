@@ -12,7 +12,8 @@ import warnings
 import numpy as np
 
 from ..errors import InputError, ScenarioError
-from ..scenario import load_scenario, parse
+from ..scenario import Scenario, load_scenario, parse
+from ..scenario.binary_schema import BinarySpec
 from ..scenario.paths import toml_text
 from .case_groups import case_data, case_text
 from ..scenario.sweep_schema import sweep_units
@@ -194,6 +195,7 @@ def _case_check(scenario, spec):
     base = tomllib.loads(scenario.text)
     source = str(scenario.path) if scenario.path is not None else scenario.name
     dimless = scenario.spec.dimensionless
+    binary = isinstance(scenario.spec, BinarySpec)
 
     def check(values, cases):
         bad = np.zeros(spec.cases, dtype=bool)
@@ -201,7 +203,9 @@ def _case_check(scenario, spec):
             warnings.simplefilter("ignore")
             for k in cases:
                 try:
-                    parse(toml_text(case_data(base, spec, values, int(k), dimless)), source)
+                    case = parse(toml_text(case_data(base, spec, values, int(k), dimless)), source)
+                    if binary:  # a binary's orbit (bound, no contact) is checked when it is built
+                        Scenario(case, path=scenario.path)
                 except ScenarioError as exc:
                     bad[k] = True
                     check.messages[int(k)] = str(exc).split(": ", 1)[-1]

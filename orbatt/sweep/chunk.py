@@ -25,12 +25,15 @@ from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
 from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
-from ..units import LEGACY_OUTPUT, to_output
-from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, PARAMETERS, RATE_PARAMETERS,
+from ..scenario.binary_schema import BinarySpec
+from ..units import to_output
+from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, RATE_PARAMETERS,
                                      sweep_units)
 from .sampling import nominal_rates
-from ..scenario.paths import coordinate_name
 from .case_groups import path_groups
+from .binary_chunk import compute_binary_chunk
+from .case_coords import parameter_coordinates
+from .stats import add_stats
 from .study import STUDY_OUTPUTS, study_outputs, target_pointing_error
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
@@ -40,7 +43,7 @@ from ..trajectory import Trajectory
 from ..body import RigidBody
 
 __all__ = ["run_chunk", "compute_chunk", "orbit_groups", "initial_states", "propagate_group", "pointing_error",
-           "conserved_energy", "add_stats", "scenario_from_text", "chunk_dataset", "concat_cases"]
+           "conserved_energy", "scenario_from_text", "chunk_dataset", "concat_cases"]
 
 _ELEMENT = {"orbit_a": "a", "orbit_e": "e", "orbit_i": "i", "orbit_raan": "raan", "orbit_argp": "argp",
             "orbit_true_anomaly": "anomaly", "orbit_mean_anomaly": "anomaly"}
@@ -68,21 +71,6 @@ def run_chunk(job):
     ds = compute_chunk(sc, sc.spec.sweep, job, sweep_units(sc.spec.sweep, sc.spec.dimensionless))
     ds.attrs["sweep_chunk_seconds"] = time.perf_counter() - t0
     return ds
-
-
-def add_stats(total, stats, skip=()):
-    """Add the numbers of the integration statistics ``stats`` (a dict, or its JSON text)
-    into ``total`` (a dict, changed in place, and returned); non-numbers and the keys in
-    ``skip`` are left out. The one place where a sweep sums statistics."""
-    if stats is None or isinstance(stats, str):
-        try:
-            stats = json.loads(stats)
-        except (TypeError, ValueError):
-            return total
-    for k, v in stats.items():
-        if isinstance(v, (int, float)) and not isinstance(v, bool) and k not in skip:
-            total[k] = total.get(k, 0) + v
-    return total
 
 
 def orbit_groups(sc, spec, values, n):
@@ -274,6 +262,8 @@ def compute_chunk(sc, spec, job, units):
         The cases' outputs along ``case``; ``integration_stats`` (JSON) summed over groups.
     """
 
+    if isinstance(sc.spec, BinarySpec):  # a binary: each case its own coupled run (binary_chunk.py)
+        return compute_binary_chunk(sc, spec, job, units)
     start, stop = job["start"], job["stop"]
     n = stop - start
     values = job["values"]
@@ -405,18 +395,7 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
         coords["quat"] = cf_variable(("quat",), QUAT_INDEX, "1", "quaternion component index (0 = scalar part)",
                               quaternion_order="w x y z")
         coords["quat_label"] = xr.Variable(("quat",), np.array(QUAT_LABELS), {"long_name": "quaternion component name"})
-    for name in spec.parameters:
-        # sampled in internal units (or a path's own unit); a kernel unit of the attitude family
-        # (the inertia parameters' kg km^2) is written in SI, as every output
-        vals, unit = values[name], units[name]
-        conv = LEGACY_OUTPUT.get(unit)
-        if conv is not None:
-            vals, unit = np.multiply(vals, conv[1]), conv[0]
-        if name in spec.paths:  # by its path: the coordinate named for it, the path as written
-            coords[coordinate_name(name)] = cf_variable(("case",), vals, unit,
-                                                        f"sampled parameter: scenario key {name}", scenario_key=name)
-        else:
-            coords[name] = cf_variable(("case",), vals, unit, f"sampled parameter: {PARAMETERS[name].long_name}")
+    coords.update(parameter_coordinates(spec, values, units))
     if axis is not None:
         coords["attitude_axis"] = cf_variable(("case", "axis"), axis, "1",
                                        "axis of the initial attitude perturbation (unit vector)", frame="B")

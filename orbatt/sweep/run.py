@@ -23,7 +23,8 @@ from ..dataset import global_attrs, open_dataset
 from ..dataset.atomic import replacing
 from ..errors import InputError, SweepError
 from .cases import Sweep, load_sweep
-from .chunk import add_stats, concat_cases, run_chunk
+from .chunk import concat_cases, run_chunk
+from .stats import add_stats
 from .parts import (chunk_ranges, done_parts, parse_part, parts_dir, read_manifest, read_parts, write_manifest,
                     write_part, write_reductions)
 
@@ -339,10 +340,17 @@ def sweep_global_attrs(ds, sweep, stats, run):
     attrs = {}
     if "trajectory" in sweep.spec.outputs:
         attrs = {k: v for k, v in ds.attrs.items() if k not in ("sweep_chunk_seconds", "epoch")}
+    binary = getattr(sc, "system", None)  # a binary asteroid (BinaryScenario): no orbit provider, no epoch
+    orbit = None if binary is not None else sc.orbit
+    if binary is not None:
+        from ..binary.dataset import describe, potential_attr
+
+        attrs["binary"] = json.dumps(describe(binary))
     attrs.update(global_attrs(
         method=sc.method, settings={"method": sc.method, **sc.settings}, stats=json.dumps(stats, sort_keys=True),
-        potential=sc.potential, dimensionless=sc.spec.dimensionless, orbit=sc.orbit,
-        epoch=None if sc.orbit is None else sc.orbit.epoch, scenario_text=sc.text,
+        potential=potential_attr(binary) if binary is not None else sc.potential,
+        dimensionless=sc.spec.dimensionless, orbit=orbit,
+        epoch=None if orbit is None else orbit.epoch, scenario_text=sc.text,
         title=f"orbatt sweep: {sc.name} ({sweep.cases} cases)",
         action=f"sweep of {sweep.cases} cases ({run.get('scheduler')})",
         sweep_output_times=np.int64(sc.times.size), sweep_t_end=float(sc.times[-1]), **sweep.attrs(),

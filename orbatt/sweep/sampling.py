@@ -29,10 +29,11 @@ def nominal_values(scenario):
     """Nominal value of every parameter the scenario has (internal units)."""
     spec = scenario.spec
     out = {f"inertia{k + 1}": float(spec.inertia[k]) for k in range(3)}
-    w = nominal_rates(scenario)
-    out.update({f"omega{k + 1}": float(w[k]) for k in range(3)})
-    out["attitude_angle"] = 0.0
-    if spec.orbit is not None and spec.orbit["provider"] != "tle":  # a TLE's elements do not vary
+    if spec.orbit is None or spec.orbit["provider"] != "coupled":  # a binary varies its keys by path only
+        w = nominal_rates(scenario)
+        out.update({f"omega{k + 1}": float(w[k]) for k in range(3)})
+        out["attitude_angle"] = 0.0
+    if spec.orbit is not None and spec.orbit["provider"] not in ("tle", "coupled"):  # a TLE's elements do not vary
         o = spec.orbit
         out.update(orbit_a=o["a"], orbit_e=o["e"], orbit_i=o["i"], orbit_raan=o["raan"], orbit_argp=o["argp"])
         out[f"orbit_{o['anomaly_kind']}"] = o["anomaly"]
