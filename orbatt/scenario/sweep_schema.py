@@ -45,8 +45,12 @@ seed                plain integer           drawn and recorded                  
 chunk_size          plain integer           automatic                                          cases per task
 outputs             list                    ['final_state', 'max_pointing_error', 'tumbling']  per-case outputs, of 'trajectory',
                                                                                                'final_state', 'max_pointing_error',
-                                                                                               'tumbling', 'final_energy_error'; a
-                                                                                               binary asteroid's: 'final_state',
+                                                                                               'tumbling', 'final_energy_error',
+                                                                                               'detumble_time', 'settling_time',
+                                                                                               'pointing_error', 'max_wheel_speed',
+                                                                                               'wheel_saturated',
+                                                                                               'max_control_torque', 'max_dipole';
+                                                                                               a binary asteroid's: 'final_state',
                                                                                                'final_orbit', 'conservation',
                                                                                                'max_libration' (all by default)
 pointing_axis       plain, 3 values         none: the whole attitude                           body axis whose pointing error is
