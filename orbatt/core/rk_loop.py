@@ -37,8 +37,8 @@ import math
 
 import numpy as np
 
-from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, borrow, borrow_model,
-                   jit, keepalive)
+from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, borrow,
+                   borrow_model, jit, keepalive)
 from .gyrostat import rhs_extended, rhs_extended_lanes
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
@@ -117,7 +117,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         inertia = borrow(inertia)
         Kown = np.empty((N_STAGES + 1, ncomp, nl))
         tmpown = np.empty((3, ncomp, nl))
-        sown = np.empty((10, nl))
+        sown = np.empty((8, nl))
         K = borrow(Kown)
         yg = borrow(tmpown[0])
         ytmp = borrow(tmpown[1])
@@ -126,8 +126,6 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         I = sv[0:3]  # noqa: E741 - the lanes' principal moments (3, nl)
         G = sv[3:7]  # scratch of rhs_lanes
         aQ = sv[7]   # the lanes' absolute tolerance of Q
-        e5 = sv[8]   # the lanes' sums of squares of the error estimates
-        e3 = sv[9]
         # --- the members in: (n, nl) working copies
         if LANES:
             for l in range(nl):
@@ -142,6 +140,11 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 yg[i, 0] = y[i]
                 K[0, i, 0] = f0[i]
             aQ[0] = atol * momentum_scale(inertia)
+            # the working arrays of the one lane as the contiguous vectors the right-hand sides take
+            y1 = yg.reshape(ncomp)
+            ytmp1 = ytmp.reshape(ncomp)
+            ynew1 = ynew.reshape(ncomp)
+            K1 = K.reshape((N_STAGES + 1, ncomp))
         t = st[ST_T]
         h = st[ST_H]
         facold = st[ST_FACOLD]
@@ -156,11 +159,11 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 else:
                     rhs_lanes(t, yg, nl, I, terms, params, table, work, G, K[0])
             elif COUPLED:
-                rhs_coupled(t, yg[:, 0], inertia, terms, params, table, work, K[0, :, 0])
+                rhs_coupled(t, y1, inertia, terms, params, table, work, K1[0])
             elif EXTENDED:
-                rhs_extended(t, yg[:, 0], inertia, terms, params, table, work, K[0, :, 0])
+                rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
             else:
-                rhs(t, yg[:, 0], inertia, terms, params, table, work, K[0, :, 0])
+                rhs(t, y1, inertia, terms, params, table, work, K1[0])
             cnt[CNT_NFEV] += 1
             flags |= FLAG_F0_VALID
         if h <= 0.0:
@@ -185,11 +188,11 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     else:
                         rhs_lanes(t + h0, ytmp, nl, I, terms, params, table, work, G, K[1])
                 elif COUPLED:
-                    rhs_coupled(t + h0, ytmp[:, 0], inertia, terms, params, table, work, K[1, :, 0])
+                    rhs_coupled(t + h0, ytmp1, inertia, terms, params, table, work, K1[1])
                 elif EXTENDED:
-                    rhs_extended(t + h0, ytmp[:, 0], inertia, terms, params, table, work, K[1, :, 0])
+                    rhs_extended(t + h0, ytmp1, inertia, terms, params, table, work, K1[1])
                 else:
-                    rhs(t + h0, ytmp[:, 0], inertia, terms, params, table, work, K[1, :, 0])
+                    rhs(t + h0, ytmp1, inertia, terms, params, table, work, K1[1])
                 for l in range(nl):
                     if COUPLED:
                         dnf, _ = hinit_norms_vec(yg[:, l], K[0, :, l], atol, inertia, rtol)
@@ -238,18 +241,19 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     else:
                         rhs_lanes(t + C[s] * hh, ytmp, nl, I, terms, params, table, work, G, K[s])
                 elif COUPLED:
-                    rhs_coupled(t + C[s] * hh, ytmp[:, 0], inertia, terms, params, table, work, K[s, :, 0])
+                    rhs_coupled(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
                 elif EXTENDED:
-                    rhs_extended(t + C[s] * hh, ytmp[:, 0], inertia, terms, params, table, work, K[s, :, 0])
+                    rhs_extended(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
                 else:
-                    rhs_inline(t + C[s] * hh, ytmp[:, 0], inertia, terms, params, table, work, K[s, :, 0])
+                    rhs_inline(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
             cnt[CNT_NFEV] += N_STAGES - 1
-            # --- the solution and each member's error estimate
+            # --- the solution and each member's error estimate (sums of squares in scalars, lane
+            # by lane: the single loop's operations; the group's error is the largest)
+            err = 0.0
             for l in range(nl):
-                e5[l] = 0.0
-                e3[l] = 0.0
-            for i in range(ncomp):
-                for l in range(nl):
+                e5 = 0.0
+                e3 = 0.0
+                for i in range(ncomp):
                     acc = 0.0
                     a5 = 0.0
                     a3 = 0.0
@@ -266,16 +270,14 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         ai = atol if i < 4 else aQ[l]
                     isk = 1.0 / (ai + rtol * max(abs(yg[i, l]), abs(ynew[i, l])))
                     a5 *= isk
-                    e5[l] += a5 * a5
+                    e5 += a5 * a5
                     if not VERNER:
                         a3 *= isk
-                        e3[l] += a3 * a3
-            err = 0.0  # the group's: the largest of the members' errors
-            for l in range(nl):
+                        e3 += a3 * a3
                 if VERNER:
-                    el = abs(hh) * math.sqrt(e5[l] / ncomp)
+                    el = abs(hh) * math.sqrt(e5 / ncomp)
                 else:
-                    el = error_norm(e5[l], e3[l], hh, ncomp)
+                    el = error_norm(e5, e3, hh, ncomp)
                 if not (el < np.inf):
                     err = np.inf
                     bad_lane = l
@@ -298,11 +300,11 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     else:
                         rhs_lanes(t_new, ynew, nl, I, terms, params, table, work, G, K[N_STAGES])
                 elif COUPLED:
-                    rhs_coupled(t_new, ynew[:, 0], inertia, terms, params, table, work, K[N_STAGES, :, 0])
+                    rhs_coupled(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
                 elif EXTENDED:
-                    rhs_extended(t_new, ynew[:, 0], inertia, terms, params, table, work, K[N_STAGES, :, 0])
+                    rhs_extended(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
                 else:
-                    rhs(t_new, ynew[:, 0], inertia, terms, params, table, work, K[N_STAGES, :, 0])
+                    rhs(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
                 cnt[CNT_NFEV] += 1
                 finite = True
                 for l in range(nl):
