@@ -7,7 +7,8 @@ binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`, one trajectory)
 The loop keeps its working copies in structure-of-arrays layout, lane index last: the state
 ``yg (n, nl)``, the stages ``K (stages + 1, n, nl)``. One trajectory is the group of one lane
 (``nl = 1``, a constant of its closure, so the lane loops fold away and the single loop runs
-the operations it always ran, bit for bit); a group of ``nl`` members shares the time, the step
+the operations it always ran, bit for bit; its working arrays are the contiguous vectors its
+right-hand side takes, which the loop indexes through ``(n, 1)`` views); a group of ``nl`` members shares the time, the step
 size and the orbit's evaluation at each stage, and its per-member loops over the lanes
 vectorize. Everything else - the stages, the error estimate, the controller, the landing on
 output times and breakpoints, acceptance and rejection, the outputs (at the output times, or
@@ -115,17 +116,33 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             ncomp = WIDTH if WIDTH > 0 else y.shape[0]
         terms, params, table, work = borrow_model(terms, params, table, work)
         inertia = borrow(inertia)
-        Kown = np.empty((N_STAGES + 1, ncomp, nl))
-        tmpown = np.empty((3, ncomp, nl))
-        sown = np.empty((8, nl))
-        K = borrow(Kown)
-        yg = borrow(tmpown[0])
-        ytmp = borrow(tmpown[1])
-        ynew = borrow(tmpown[2])
+        if LANES:
+            Kown = np.empty((N_STAGES + 1, ncomp, nl))
+            tmpown = np.empty((3, ncomp, nl))
+            K = borrow(Kown)
+            yg = borrow(tmpown[0])
+            ytmp = borrow(tmpown[1])
+            ynew = borrow(tmpown[2])
+        else:
+            # the one lane's working arrays are the contiguous vectors the right-hand sides take
+            # (as the single loop always had them); the loop indexes their (n, 1) views
+            Kown = np.empty((N_STAGES + 1, ncomp))
+            tmpown = np.empty((3, ncomp))
+            K1 = borrow(Kown)
+            y1 = borrow(tmpown[0])
+            ytmp1 = borrow(tmpown[1])
+            ynew1 = borrow(tmpown[2])
+            K = K1[:, :, np.newaxis]
+            yg = y1[:, np.newaxis]
+            ytmp = ytmp1[:, np.newaxis]
+            ynew = ynew1[:, np.newaxis]
+        sown = np.empty((10, nl))
         sv = borrow(sown)
         I = sv[0:3]  # noqa: E741 - the lanes' principal moments (3, nl)
         G = sv[3:7]  # scratch of rhs_lanes
         aQ = sv[7]   # the lanes' absolute tolerance of Q
+        e5 = sv[8]   # the lanes' sums of squares of the error estimates
+        e3 = sv[9]
         # --- the members in: (n, nl) working copies
         if LANES:
             for l in range(nl):
@@ -140,11 +157,6 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 yg[i, 0] = y[i]
                 K[0, i, 0] = f0[i]
             aQ[0] = atol * momentum_scale(inertia)
-            # the working arrays of the one lane as the contiguous vectors the right-hand sides take
-            y1 = yg.reshape(ncomp)
-            ytmp1 = ytmp.reshape(ncomp)
-            ynew1 = ynew.reshape(ncomp)
-            K1 = K.reshape((N_STAGES + 1, ncomp))
         t = st[ST_T]
         h = st[ST_H]
         facold = st[ST_FACOLD]
@@ -247,13 +259,12 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 else:
                     rhs_inline(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
             cnt[CNT_NFEV] += N_STAGES - 1
-            # --- the solution and each member's error estimate (sums of squares in scalars, lane
-            # by lane: the single loop's operations; the group's error is the largest)
-            err = 0.0
+            # --- the solution and each member's error estimate (lanes innermost: vectorized)
             for l in range(nl):
-                e5 = 0.0
-                e3 = 0.0
-                for i in range(ncomp):
+                e5[l] = 0.0
+                e3[l] = 0.0
+            for i in range(ncomp):
+                for l in range(nl):
                     acc = 0.0
                     a5 = 0.0
                     a3 = 0.0
@@ -270,14 +281,16 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         ai = atol if i < 4 else aQ[l]
                     isk = 1.0 / (ai + rtol * max(abs(yg[i, l]), abs(ynew[i, l])))
                     a5 *= isk
-                    e5 += a5 * a5
+                    e5[l] += a5 * a5
                     if not VERNER:
                         a3 *= isk
-                        e3 += a3 * a3
+                        e3[l] += a3 * a3
+            err = 0.0  # the group's: the largest of the members' errors
+            for l in range(nl):
                 if VERNER:
-                    el = abs(hh) * math.sqrt(e5 / ncomp)
+                    el = abs(hh) * math.sqrt(e5[l] / ncomp)
                 else:
-                    el = error_norm(e5, e3, hh, ncomp)
+                    el = error_norm(e5[l], e3[l], hh, ncomp)
                 if not (el < np.inf):
                     err = np.inf
                     bad_lane = l
@@ -367,3 +380,4 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         return status
 
     return jit(advance)
+
