@@ -412,7 +412,7 @@ def bdot_cases(sweep, ks):
                     "omega": [v[f"omega{i}"] for i in (1, 2, 3)],
                     "t_end": float(sc.times[-1]), "gm": float(o.gm) * 1e9,
                     "elements": orbit_elements(o), "coefficients": coefficients.tolist(), "c0": c0.tolist(),
-                    "gain": control.gain, "max_dipole": control.max_dipole,
+                    "gain": control["gain"], "max_dipole": control["max_dipole"],
                     "detumble_rate": float(sweep.spec.detumble_rate)})
     return out
 

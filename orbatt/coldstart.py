@@ -55,6 +55,7 @@ import time
 from pathlib import Path
 
 from .cachedir import cache_folder
+from .fast_paths import ENABLED as FAST_PATHS
 from .shipped import scenario_file
 
 __all__ = ["ENV_MODE", "LONG_RUN_S", "PROJECT_AFTER_S", "ColdStart", "plan", "kernel_key", "fingerprint",
@@ -76,10 +77,20 @@ def stamp_folder() -> Path:
     return cache_folder()
 
 
+_FINGERPRINT = None
+
+
 def fingerprint() -> dict:
     """What numba's cache of the kernels depends on: the package's source files (path,
     modification time, size: numba's own test), the versions of orbatt, numba and Python, and
-    the machine."""
+    the machine. Computed once per process (a warm run asks twice: before and after)."""
+    global _FINGERPRINT
+    if _FINGERPRINT is None:
+        _FINGERPRINT = _compute_fingerprint()
+    return dict(_FINGERPRINT)
+
+
+def _compute_fingerprint() -> dict:
     from importlib.metadata import PackageNotFoundError, version
 
     h = hashlib.sha1()
@@ -272,7 +283,8 @@ def plan(scenario, method=None) -> ColdStart | None:
     scenario has no warm stamp (the caller must then set ``NUMBA_DISABLE_JIT=1`` before numba is
     imported and start the warm-up), or None to run compiled (a warm cache, numba already
     imported, ``ORBATT_COLD_START=compile``, or a file the run will refuse anyway)."""
-    if os.environ.get(ENV_MODE, "interpret").lower() == "compile" or "numba" in sys.modules:
+    if (os.environ.get(ENV_MODE, "interpret").lower() == "compile" or "numba" in sys.modules
+            or not FAST_PATHS):  # ORBATT_FAST_PATHS=0 (orbatt.fast_paths): every run compiles
         return None
     if os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"):
         return None  # the user asked for interpreted kernels: nothing to warm up

@@ -9,8 +9,11 @@
   the Sun, made by an ideal actuator or by the wheels.
 * :class:`BDotControl`: B-dot detumbling with magnetorquers.
 
-A control law acts through :class:`orbatt.EnvironmentTorques` (``control=``), which holds the
-orbit and samples the fields the law reads (the Sun, the magnetic field). Rate-dependent laws
+A control law rides with :class:`orbatt.EnvironmentTorques` (``control=``), which holds the
+orbit and samples the fields the law reads (the Sun, the magnetic field,
+:meth:`~orbatt.EnvironmentTorques.field_table`); the law gives its own model row
+(``model_row``), which :func:`orbatt.model_assembly.assemble` packs after the potential's terms
+and the wheels' row. Rate-dependent laws
 need an adaptive method (``dop853`` or scipy's); wheels too (their state is integrated).
 """
 from __future__ import annotations
@@ -23,8 +26,8 @@ from .core import control as kc
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row", "wheel_axes_span",
-           "extend_model"]
+__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "LAWS", "wheels_row",
+           "wheel_axes_span", "control_law", "reaction_wheel"]
 
 #: a wheel axis or a Sun-pointing axis must have |a| = 1 within this
 AXIS_TOLERANCE = 1e-6
@@ -89,6 +92,9 @@ class ReactionWheel:
         Speed limit: the motor does not push the rotor beyond it (default: none).
     """
 
+    #: the plain settings (:meth:`settings`, :func:`reaction_wheel`): key -> SI unit
+    UNITS = {"axis": None, "inertia": "kg m2", "speed": "rad / s", "max_torque": "N m", "max_speed": "rad / s"}
+
     def __init__(self, axis, inertia, speed=0.0 * u.rad / u.s, *, max_torque=None, max_speed=None, name=None):
         self.axis = _unit_vector(axis, "axis")
         self.inertia_kg_m2 = _value(inertia, u.kg * u.m**2, "inertia", positive=True)
@@ -99,6 +105,12 @@ class ReactionWheel:
             raise InputError(f"speed: {self.speed_rad_s:.6g} rad/s is above max_speed = {self.max_speed_rad_s:.6g} "
                              "rad/s; lower the initial speed or raise max_speed")
         self.name = name
+
+    def settings(self):
+        """The plain settings (SI floats, :data:`UNITS`) that :func:`reaction_wheel` makes this
+        wheel of again."""
+        return {"axis": self.axis.tolist(), "inertia": self.inertia_kg_m2, "speed": self.speed_rad_s,
+                "max_torque": self.max_torque_n_m, "max_speed": self.max_speed_rad_s}
 
     @property
     def inertia(self):
@@ -162,6 +174,9 @@ class PDControl:
     """
 
     law = "pd"
+    #: the ``[control]`` keys of the law (besides ``law``) -> SI unit (None: plain or a name)
+    UNITS = {"target": None, "target_q": None, "target_axis": None, "kp": "N m", "kd": "N m s", "max_torque": "N m",
+             "actuator": None}
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
                  target_axis=None):
@@ -197,16 +212,41 @@ class PDControl:
         tmax = np.inf if self.max_torque is None else self.max_torque * _N_M
         values = (self.target_axis if self.target == "sun" else
                   self.target_q if self.target_q is not None else (1.0, 0.0, 0.0, 0.0))
-        axes = None
-        if self.actuator == "wheels":
-            if not wheels:
-                raise InputError("actuator: 'wheels' needs the body's reaction wheels ([[body.wheels]])")
-            axes = np.array([w.axis for w in wheels])
-            if not wheel_axes_span(wheels):
-                raise InputError(f"[[body.wheels]] axis: the {len(wheels)} wheel axes {axes.tolist()} do not span "
-                                 "three dimensions, which leaves an axis uncontrollable; add or tilt a wheel")
+        self.check_wheels(wheels)
+        axes = np.array([w.axis for w in wheels]) if self.actuator == "wheels" else None
         params = kc.pd_params(TARGETS[self.target], self.kp * _N_M, self.kd * _N_M, tmax, values, axes)
         return (km.PD_CONTROL, params, sun_table)
+
+    def check_wheels(self, wheels):
+        """Refuse ``wheels`` (a list of :class:`ReactionWheel`) as the actuator of a law with
+        ``actuator = "wheels"``: none, or axes that do not span three dimensions."""
+        if self.actuator != "wheels":
+            return
+        if not wheels:
+            raise InputError("actuator: 'wheels' needs the body's reaction wheels ([[body.wheels]])")
+        if not wheel_axes_span(wheels):
+            axes = np.array([w.axis for w in wheels])
+            raise InputError(f"[[body.wheels]] axis: the {len(wheels)} wheel axes {axes.tolist()} do not span "
+                             "three dimensions, which leaves an axis uncontrollable; add or tilt a wheel")
+
+    def settings(self):
+        """The plain settings (``law`` and the :data:`UNITS` keys, SI floats) that
+        :func:`control_law` makes this law of again."""
+        return {"law": self.law, "target": self.target, "kp": self.kp, "kd": self.kd, "max_torque": self.max_torque,
+                "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
+                "target_axis": None if self.target_axis is None else self.target_axis.tolist()}
+
+    def model_row(self, wheels, tables):
+        """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
+        gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
+        Sun's position (``"sun"``) for ``target = "sun"``."""
+        sun = tables("sun") if self.target == "sun" else None
+        key = tuple(wheels)
+        rows = self.__dict__.setdefault("_rows", {})
+        hit = rows.get(key)
+        if hit is None or hit[0] is not sun:  # made once per set of wheels and Sun table (~60 us)
+            hit = rows[key] = (sun, self.row(wheels, sun))
+        return hit[1]
 
     def describe(self):
         d = {"law": "pd", "target": self.target, "kp_N_m": self.kp, "kd_N_m_s": self.kd,
@@ -234,6 +274,8 @@ class BDotControl:
     """
 
     law = "bdot"
+    #: the ``[control]`` keys of the law (besides ``law``) -> SI unit
+    UNITS = {"gain": "A m2 s / T", "max_dipole": "A m2"}
 
     def __init__(self, gain, max_dipole):
         self.gain = _value(gain, u.A * u.m**2 * u.s / u.T, "gain", nonnegative=True)
@@ -244,6 +286,18 @@ class BDotControl:
         (T, inertial; a spline table of :mod:`orbatt.core.environment`)."""
         return (km.BDOT_CONTROL, [self.gain * _N_M, self.max_dipole * _N_M], field_table)
 
+    def check_wheels(self, wheels):
+        """Nothing to refuse: the magnetorquers act whatever the wheels."""
+
+    def settings(self):
+        """The plain settings that :func:`control_law` makes this law of again."""
+        return {"law": self.law, "gain": self.gain, "max_dipole": self.max_dipole}
+
+    def model_row(self, wheels, tables):
+        """The law's model row (:meth:`row`; ``wheels`` unused); ``tables(name)`` gives the
+        magnetic field along the orbit (``"field"``, :meth:`orbatt.EnvironmentTorques.field_table`)."""
+        return self.row(tables("field"))
+
     def describe(self):
         return {"law": "bdot", "gain_A_m2_s_per_T": self.gain, "max_dipole_A_m2": self.max_dipole}
 
@@ -251,13 +305,34 @@ class BDotControl:
         return f"BDotControl(gain={self.gain:.4g} A m^2 s/T, max_dipole={self.max_dipole:.4g} A m^2)"
 
 
-def extend_model(model, rows):
-    """The model ``(terms, params, table)`` with the rows ``(kind, params, table)`` appended
-    (:func:`orbatt.core.model.build`)."""
-    terms, params, table = model
+#: the control laws by name (``[control] law``; each class's ``UNITS`` are its keys)
+LAWS = {cls.law: cls for cls in (PDControl, BDotControl)}
 
-    def row(j):
-        t = table[terms[j, km.R0]:terms[j, km.R1]] if terms[j, km.R1] > terms[j, km.R0] else None
-        return (int(terms[j, km.KIND]), params[terms[j, km.P0]:terms[j, km.P1]], t)
 
-    return km.build(orbit=row(0), terms=[row(j) for j in range(1, terms.shape[0])] + list(rows))
+def _arguments(units, settings):
+    """Keyword arguments of plain ``settings``: each value with a unit in ``units`` as a
+    Quantity (None stays None)."""
+    return {k: v if units[k] is None or v is None else v * u.Unit(units[k]) for k, v in settings.items()}
+
+
+def control_law(settings):
+    """The law of plain ``settings`` (``{"law": name, key: value}``, SI floats in the law's
+    ``UNITS``; :meth:`PDControl.settings`): a :class:`PDControl` or :class:`BDotControl`, whose
+    constructor checks every rule (:class:`~orbatt.errors.InputError` naming the key)."""
+    settings = dict(settings)
+    name = settings.pop("law", None)
+    if name not in LAWS:
+        raise InputError(f"law: {name!r} is not one of {', '.join(map(repr, LAWS))}")
+    cls = LAWS[name]
+    unknown = sorted(set(settings) - set(cls.UNITS))
+    if unknown:
+        raise InputError(f"{unknown[0]}: not read by law = {name!r}; its keys: {', '.join(cls.UNITS)}")
+    return cls(**_arguments(cls.UNITS, settings))
+
+
+def reaction_wheel(settings, name=None):
+    """The :class:`ReactionWheel` of plain ``settings`` (SI floats in
+    :data:`ReactionWheel.UNITS`; :meth:`ReactionWheel.settings`)."""
+    kw = _arguments(ReactionWheel.UNITS, settings)
+    axis, inertia = kw.pop("axis"), kw.pop("inertia")
+    return ReactionWheel(axis, inertia, kw.pop("speed", 0.0 * u.rad / u.s), name=name, **kw)

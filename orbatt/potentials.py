@@ -14,6 +14,7 @@ import numpy as np
 
 from . import units as U
 from .body import RigidBody
+from .core import evaluation as kev
 from .core import model as km
 from .core import potentials as kp
 from .errors import InputError
@@ -26,7 +27,7 @@ def kernel_backed(method):
     :func:`evaluate_members` then evaluates an ensemble in one compiled call. A subclass that
     overrides ``evaluate`` or ``term_torques`` without this mark gets a call per member; a marked
     ``term_torques`` other than the base one gives each kernel term's torque, as
-    :func:`orbatt.core.model.evaluate_terms`."""
+    :func:`orbatt.core.evaluation.evaluate_terms`."""
     method.kernel_backed = True
     return method
 
@@ -105,7 +106,7 @@ class Potential:
             t.flags.writeable = False
         else:
             t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        return km.evaluate_many(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+        return kev.evaluate_many(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
 
     def kernel_model(self):
         """The compiled model ``(terms, params, table)`` of this potential
@@ -290,7 +291,7 @@ def member_body(body, inertia):
 
 def _total_torque_only(potential):
     """Whether ``potential``'s terms are its one total torque (the base ``term_torques``); else
-    each term has its own (a kernel-backed ``term_torques``: ``orbatt.core.model.evaluate_terms``)."""
+    each term has its own (a kernel-backed ``term_torques``: ``orbatt.core.evaluation.evaluate_terms``)."""
     return getattr(type(potential), "term_torques", None) is Potential.term_torques
 
 
@@ -316,7 +317,7 @@ def evaluate_members(potential, body, inertia, t, q, want_tau):
 
     A :class:`Potential` whose ``evaluate`` and ``term_torques`` are :func:`kernel_backed` is
     checked once (``evaluate`` of the first member) and evaluated in one compiled call
-    (:func:`orbatt.core.model.evaluate_members`, the orbit evaluated once for all members): 10^4
+    (:func:`orbatt.core.evaluation.evaluate_members`, the orbit evaluated once for all members): 10^4
     members of the Keplerian case over 11 outputs in 4 ms instead of 147 ms of a call per member
     (``benchmarks/run.py``'s ensemble end-to-end rows). Any other potential: a call per member."""
     cls = type(potential)
@@ -325,7 +326,7 @@ def evaluate_members(potential, body, inertia, t, q, want_tau):
         t = np.ascontiguousarray(t, dtype=np.float64)
         q = np.ascontiguousarray(q, dtype=np.float64)
         potential.evaluate(body, t, q[0])  # what evaluate checks (the body, the times), once
-        U, tau = km.evaluate_members(t, q, np.ascontiguousarray(inertia, dtype=np.float64),
+        U, tau = kev.evaluate_members(t, q, np.ascontiguousarray(inertia, dtype=np.float64),
                                      *potential.kernel_model(), not _total_torque_only(potential), want_tau)
         return U, (tau if want_tau else None)
     members = [energy_and_torques(potential, member_body(body, inertia[e]), t, q[e], want_tau)

@@ -20,23 +20,23 @@ import numpy as np
 from astropy import units as u
 
 from . import units as U
-from .core import environment as kenv
+from .core import evaluation as kev
 from .core import model as km
-from .core.kinds import BY_NAME
 from .core import potentials as kp
+from .core.kinds import BY_NAME
 from .environment import sun as esun
-from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
 from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sample_along_orbit, tabulate
 from .control import BDotControl, PDControl
 from .errors import InputError
 from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
+from .terms import TERMS
 
-__all__ = ["Facet", "EnvironmentTorques", "TERM_NAMES", "FIELDS_SOURCE", "sample_margin"]
+__all__ = ["Facet", "facet", "EnvironmentTorques", "TERM_NAMES", "TERM_KEYWORDS", "FIELDS_SOURCE", "sample_margin"]
 
 #: where the Dataset's environment fields come from (its variables' ``source`` attribute)
 FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
-                 "interpolated; docs/design.md §10)")
+                 "interpolated; docs/design.md §10), or the closed form the kernel evaluates (exponential atmosphere)")
 #: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
 TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
 _AREA = u.m**2
@@ -74,6 +74,24 @@ def sample_margin(*, drag=False, srp=False, magnetic=False, sun=False):
     steps = [step for on, step in ((drag, DENSITY_STEP), (srp or sun, SUN_STEP), (magnetic, MAGNETIC_FIELD_STEP))
              if on]
     return max(steps, default=0.0)
+
+
+#: the keywords of :class:`EnvironmentTorques` its signature names (the terms' among them)
+_NAMED = {"gravity_gradient", "drag", "srp", "residual_dipole", "constant_torque"}
+#: the terms' keywords :class:`EnvironmentTorques` takes through ``**terms``: those of the
+#: vector keys of :data:`orbatt.terms.TERMS` its signature does not name (a new term's)
+TERM_KEYWORDS = {k.argument: k for t in TERMS for k in t.keys if k.kind == "vector" and k.argument not in _NAMED}
+_TERM_OF = {k.argument: t for t in TERMS for k in t.keys}
+
+
+def _vector_argument(spec, value):
+    """The value (3 floats in the key's unit, or None) of a term's keyword ``spec.argument``."""
+    if value is None:
+        return None
+    v = _quantity(value, u.Unit(spec.unit), spec.argument)
+    if np.shape(v) != (3,) or not np.all(np.isfinite(v)):
+        raise InputError(f"{spec.argument}: expected 3 finite values in {spec.unit}, got {value!r}")
+    return np.asarray(v, dtype=np.float64)
 
 
 class Facet:
@@ -120,6 +138,12 @@ class Facet:
         self.specular = float(specular)
         self.diffuse = float(diffuse)
 
+    def settings(self):
+        """The plain settings (SI floats: m^2, m) that :func:`facet` makes this plate of again."""
+        return {"area": float(self.area.to_value(_AREA)), "normal": self.normal.tolist(),
+                "position": self.position.to_value(_LENGTH_M).tolist(), "drag_coefficient": self.drag_coefficient,
+                "specular": self.specular, "diffuse": self.diffuse}
+
     def row(self, coefficient_km2):
         """The kernel row ``[c, n, r (km), C_s, C_d]`` (:data:`orbatt.core.torques.FACET_SIZE`)."""
         return np.r_[coefficient_km2, self.normal, self.position.to_value(u.km), self.specular, self.diffuse]
@@ -131,6 +155,14 @@ class Facet:
     def __repr__(self):
         return (f"Facet(area={self.area:.4g}, normal={self.normal.tolist()}, position={self.position}, "
                 f"C_D={self.drag_coefficient}, specular={self.specular}, diffuse={self.diffuse})")
+
+
+def facet(settings, name="facet"):
+    """The :class:`Facet` of plain ``settings`` (:meth:`Facet.settings`: area in m^2, position in
+    m), whose constructor checks every rule (:class:`~orbatt.errors.InputError` naming
+    ``name.key``)."""
+    return Facet(settings["area"] * _AREA, settings["normal"], np.asarray(settings["position"]) * _LENGTH_M,
+                 settings["drag_coefficient"], settings["specular"], settings["diffuse"], name=name)
 
 
 class EnvironmentTorques(Potential):
@@ -174,6 +206,9 @@ class EnvironmentTorques(Potential):
     constant_torque : Quantity (3,) (torque), optional
         A constant body torque (body axes; thruster misalignment, outgassing): the term
         ``torque_constant``. It reads no orbit.
+    **terms : Quantity (3,), optional
+        The keyword of any other term of :data:`orbatt.terms.TERMS` (:data:`TERM_KEYWORDS`: its
+        key's ``argument``, 3 values in the key's unit; an attribute of the same name).
     """
 
     name = "environment"
@@ -181,7 +216,13 @@ class EnvironmentTorques(Potential):
 
     def __init__(self, orbit, t_end, *, facets=(), gravity_gradient=True, drag=False, srp=False,
                  residual_dipole=None, atmosphere=None, magnetic_field=None, shadow="conical", corotation=True,
-                 t_start=0.0 * u.s, control=None, constant_torque=None):
+                 t_start=0.0 * u.s, control=None, constant_torque=None, **terms):
+        for name in terms:
+            if name not in TERM_KEYWORDS:
+                raise TypeError(f"EnvironmentTorques() got an unexpected keyword argument {name!r}; the terms' "
+                                f"keywords: {', '.join(sorted(TERM_KEYWORDS)) or 'none besides the named ones'}")
+        extra = {name: _vector_argument(spec, terms.get(name)) for name, spec in TERM_KEYWORDS.items()}
+        self.__dict__.update(extra)
         const = None
         if constant_torque is not None:
             const = _quantity(constant_torque, u.N * u.m, "constant_torque")
@@ -191,10 +232,10 @@ class EnvironmentTorques(Potential):
         if orbit is None:
             needs = [n for n, on in (("gravity_gradient", gravity_gradient), ("drag", drag), ("srp", srp),
                                      ("residual_dipole", residual_dipole is not None), ("control", control is not None))
-                     if on]
+                     if on] + [n for n, v in extra.items() if v is not None and _TERM_OF[n].kind.orbit]
             if needs:
                 raise InputError(f"orbit: {needs[0]} needs an orbit provider (KeplerOrbit, ReboundOrbit, TleOrbit)")
-            if const is None:
+            if const is None and not any(v is not None for v in extra.values()):
                 raise InputError("constant_torque: without an orbit the torques need a constant_torque")
         elif not isinstance(orbit, OrbitProvider):
             raise InputError(f"orbit: expected an orbit provider (KeplerOrbit, ReboundOrbit), got {type(orbit).__name__}")
@@ -236,7 +277,6 @@ class EnvironmentTorques(Potential):
         if isinstance(control, PDControl) and control.target == "sun" and epoch is None:
             raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
         self.control = control
-        self._control_rows = {}
         valid = None if orbit is None else orbit.time_span
         if valid is not None and (t0 < valid[0] or t1 > valid[1]):
             key, value = ("t_start", t0) if t0 < valid[0] else ("t_end", t1)
@@ -249,7 +289,7 @@ class EnvironmentTorques(Potential):
         else:
             self.kind, self.params, self.table = orbit.kernel()
         self._fields = {}
-        self._field_tables = {}  # the spline tables build_model made: density, sun, field
+        self._field_tables = {}  # the spline tables of field_table: density, sun, field
 
     # --- the kernel model
     def _samples(self, step):
@@ -267,60 +307,39 @@ class EnvironmentTorques(Potential):
         step = min(step, (hi - lo) / 3.0)
         return sample_along_orbit(self.orbit, lo * u.s, hi * u.s, step * u.s)
 
+    def field_table(self, name):
+        """The spline table (:mod:`orbatt.core.environment`) of an environment field along the
+        orbit, sampled over the run and its margin (:meth:`_samples`) once and kept: ``"density"``
+        (kg km^-3, of ``atmosphere``), ``"sun"`` (the Sun's position, km, inertial) or
+        ``"field"`` (``B`` in T, inertial, of ``magnetic_field``). The terms' rows
+        (:mod:`orbatt.terms`) and the control laws' (:mod:`orbatt.control`) read them."""
+        if name not in self._field_tables:
+            if name == "density":
+                tab = tabulate(self._samples(DENSITY_STEP), self.atmosphere.density) * 1.0
+                tab[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
+            elif name == "sun":
+                tab = tabulate(self._samples(SUN_STEP), lambda t, r: esun.sun_position(t))
+            elif name == "field":
+                tab = tabulate(self._samples(MAGNETIC_FIELD_STEP), self.magnetic_field.field)
+            else:
+                raise ValueError(f"field_table: unknown field {name!r}; one of 'density', 'sun', 'field'")
+            self._field_tables[name] = tab
+        return self._field_tables[name]
+
     def build_model(self):
         """The compiled model ``(terms, params, table)`` (:mod:`orbatt.core.model`): the orbit,
-        then gravity gradient, drag, SRP, magnetic, constant torque, in that order (those
-        enabled); built once, by :meth:`kernel_model`."""
+        then the enabled terms of :data:`orbatt.terms.TERMS` in that order (gravity gradient,
+        drag, SRP, magnetic, constant torque), each row from its descriptor; built once, by
+        :meth:`kernel_model` (:func:`orbatt.model_assembly.assemble` appends the wheels' and the
+        control law's rows)."""
         orbit_row = None
         if self.orbit is not None:
             okind, oparams, otable = km.from_spec(self.kind, self.params, self.table)
             orbit_row = (int(okind[0, km.KIND]), oparams[okind[0, km.P0]:okind[0, km.P1]],
                          otable[okind[0, km.R0]:okind[0, km.R1]] if okind[0, km.R1] > okind[0, km.R0] else None)
-        gm = float(self.params[0])
-        rows, self.term_kinds = [], []
-        if self.gravity_gradient:
-            rows.append((km.GRAVITY_GRADIENT, [gm], None))
-        if self.drag:
-            s = self._samples(DENSITY_STEP)
-            dens = tabulate(s, self.atmosphere.density) * 1.0
-            dens[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
-            self._field_tables["density"] = dens
-            F = np.array([f.row(f.drag_coefficient * f.area.to_value(u.km**2)) for f in self.facets])
-            rows.append((km.DRAG, km.drag_params(F, EARTH_ROTATION_RATE if self.corotation else 0.0), dens))
-        if self.srp:
-            s = self._samples(SUN_STEP)
-            sun = tabulate(s, lambda t, r: esun.sun_position(t))
-            self._field_tables["sun"] = sun
-            F = np.array([f.row(f.area.to_value(u.km**2)) for f in self.facets])
-            pressure = esun.SRP_FLUX / esun.SPEED_OF_LIGHT * 1e3  # N m^-2 -> kg km^-1 s^-2
-            shadow = {"none": km.SHADOW_NONE, "cylindrical": km.SHADOW_CYLINDRICAL,
-                      "conical": km.SHADOW_CONICAL}[self.shadow]
-            rows.append((km.SRP, km.srp_params(F, pressure, esun.AU, shadow, R_EARTH_WGS84, esun.R_SUN), sun))
-        if self.residual_dipole is not None:
-            s = self._samples(MAGNETIC_FIELD_STEP)
-            self._field_tables["field"] = tabulate(s, self.magnetic_field.field)
-            rows.append((km.MAGNETIC, self.residual_dipole * 1e-6, self._field_tables["field"]))
-        if self.constant_torque is not None:
-            rows.append((km.CONSTANT_TORQUE, self.constant_torque * 1e-6, None))  # N m -> kg km^2 s^-2
+        rows = [term.row(self) for term in TERMS if term.enabled(self)]
         self.term_kinds = [r[0] for r in rows]
         return km.build(orbit=orbit_row, terms=rows)
-
-    def control_row(self, wheels):
-        """The model row of the control law (:mod:`orbatt.control`) for a body with ``wheels``,
-        with the field it reads sampled along the orbit (sampled once per set of wheels)."""
-        key = tuple(wheels)
-        if key not in self._control_rows:
-            self._control_rows[key] = self._control_row(wheels)
-        return self._control_rows[key]
-
-    def _control_row(self, wheels):
-        if isinstance(self.control, BDotControl):
-            s = self._samples(MAGNETIC_FIELD_STEP)
-            return self.control.row(tabulate(s, self.magnetic_field.field))
-        sun = None
-        if self.control.target == "sun":
-            sun = tabulate(self._samples(SUN_STEP), lambda t, r: esun.sun_position(t))
-        return self.control.row(wheels, sun)
 
     @property
     def time_span(self):
@@ -348,7 +367,7 @@ class EnvironmentTorques(Potential):
         (s) and attitudes ``q (N, 4)``."""
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
         t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        _, tau = km.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+        _, tau = kev.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
         return tau
 
     def fields(self, t):
@@ -360,7 +379,8 @@ class EnvironmentTorques(Potential):
         before the model is built)."""
         t = np.asarray(t, dtype=np.float64)
         out = {}
-        if not (self.drag or self.srp or self.residual_dipole is not None):
+        terms = [term for term in TERMS if term.sample is not None and term.enabled(self)]
+        if not terms:
             return out
         epoch = getattr(self.orbit, "epoch", None)
         pos, _ = self.orbit.state(t)
@@ -368,19 +388,8 @@ class EnvironmentTorques(Potential):
         time = None if epoch is None else epoch + t * u.s
         tabs = self._field_tables if self.span is not None and t.size and self.span[0] <= t.min() \
             and t.max() <= self.span[1] else {}
-        if self.drag:
-            out["density"] = (kenv.spline_eval_many(tabs["density"], np.ascontiguousarray(t), 1)[:, 0] * 1e-9
-                              if "density" in tabs else np.asarray(self.atmosphere.density(time, pos), dtype=np.float64))
-        if self.residual_dipole is not None:
-            out["magnetic_field"] = (kenv.spline_eval_many(tabs["field"], np.ascontiguousarray(t), 3) if "field" in tabs
-                                     else np.asarray(self.magnetic_field.field(time, pos), dtype=np.float64))
-        if self.srp:
-            sun = (kenv.spline_eval_many(tabs["sun"], np.ascontiguousarray(t), 3) if "sun" in tabs
-                   else np.asarray(esun.sun_position(time), dtype=np.float64))
-            d = sun - pos
-            out["sun_direction"] = d / np.linalg.norm(d, axis=-1, keepdims=True)
-            out["shadow"] = (np.ones(t.shape) if self.shadow == "none" else
-                             esun.shadow(pos, sun, kind=self.shadow, body_radius=R_EARTH_WGS84))
+        for term in terms:
+            out.update(term.sample(self, t, pos, time, tabs))
         return out
 
     def describe(self):
@@ -390,6 +399,9 @@ class EnvironmentTorques(Potential):
              "sampled_span_s": None if self.span is None else list(self.span)}
         if self.constant_torque is not None:
             d["constant_torque_N_m"] = self.constant_torque.tolist()
+        for name, spec in TERM_KEYWORDS.items():
+            if getattr(self, name) is not None:
+                d[f"{name}_{spec.unit.replace(' ', '_')}"] = getattr(self, name).tolist()
         if self.residual_dipole is not None:
             d["residual_dipole_A_m2"] = self.residual_dipole.tolist()
         if self.atmosphere is not None:

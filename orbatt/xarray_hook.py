@@ -48,8 +48,11 @@ def _remove_finder():
 
 
 def install_accessor_hook():
-    """Register the accessor now if xarray is imported, else right after its import."""
-    if "xarray" in sys.modules:
+    """Register the accessor now if xarray is imported (or the fast paths are off,
+    ``ORBATT_FAST_PATHS=0``: then xarray is imported now), else right after its import."""
+    from .fast_paths import ENABLED
+
+    if "xarray" in sys.modules or not ENABLED:
         _register_accessor()
     elif not any(isinstance(f, _AccessorWithXarray) for f in sys.meta_path):
         sys.meta_path.insert(0, _AccessorWithXarray())

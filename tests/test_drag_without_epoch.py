@@ -39,3 +39,25 @@ def test_nrlmsis_still_needs_an_epoch():
     text = _scenario('atmosphere = "nrlmsis"\nf107 = 150\nf107a = 150\nap = 4', epoch=False)
     with pytest.raises(ScenarioError, match=r"\[orbit\] epoch"):
         parse(text, "msis.toml")
+
+
+def test_closed_form_density_interpreted_gives_the_compiled_bits(tmp_path):
+    """The exponential density is evaluated in the kernel (math.exp): an interpreted first run
+    (orbatt.coldstart) gives the compiled run's bits."""
+    import os
+    import subprocess
+
+    from orbatt.dataset import open_dataset
+
+    path = tmp_path / "exp.toml"
+    path.write_text(_scenario('atmosphere = "exponential"', epoch=False))
+    base = {k: v for k, v in os.environ.items() if k not in ("NUMBA_DISABLE_JIT", "ORBATT_COLD_START")}
+    outs = {}
+    for mode, extra in (("interpreted", {"NUMBA_DISABLE_JIT": "1"}), ("compiled", {"ORBATT_COLD_START": "compile"})):
+        outs[mode] = tmp_path / f"{mode}.nc"
+        r = subprocess.run(["orbatt", "run", str(path), "-o", str(outs[mode]), "--quiet"], capture_output=True,
+                           text=True, env={**base, **extra}, timeout=600)
+        assert r.returncode == 0, r.stderr
+    with open_dataset(outs["interpreted"]) as a, open_dataset(outs["compiled"]) as b:
+        for name in ("q", "Q", "torque_drag", "density"):
+            assert np.array_equal(a[name].values, b[name].values), name

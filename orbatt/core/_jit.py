@@ -21,6 +21,8 @@ from numba.core.caching import FunctionCache
 from numba.core.runtime import rtsys
 from numba.extending import intrinsic
 
+from ..fast_paths import ENABLED as _FAST_PATHS
+
 
 class _CheckedCache(FunctionCache):
     """numba's disk cache of a kernel that survives an unreadable entry, and (where numba's
@@ -104,6 +106,7 @@ def core_stamp() -> str:
         for f in sorted(Path(__file__).resolve().parent.glob("*.py")):
             st = f.stat()
             h.update(f"{f.name}:{st.st_mtime_ns}:{st.st_size};".encode())
+        h.update(f"fast_paths={_FAST_PATHS}".encode())  # borrowed arrays or not: other machine code
         _CORE_STAMP = h.hexdigest()
     return _CORE_STAMP
 
@@ -130,8 +133,10 @@ def _preset(**options):
 
 
 #: the numba internals the fast loads of :class:`_CheckedCache` rely on are there (checked
-#: with numba 0.68); ``ORBATT_FAST_LOADS=0`` turns them off
-FAST_LOADS = (all(hasattr(FunctionCache, name) for name in ("_load_overload", "_guard_against_spurious_io_errors"))
+#: with numba 0.68); ``ORBATT_FAST_LOADS=0`` or ``ORBATT_FAST_PATHS=0`` (:mod:`orbatt.fast_paths`)
+#: turns them off
+FAST_LOADS = (_FAST_PATHS and all(hasattr(FunctionCache, name)
+                                  for name in ("_load_overload", "_guard_against_spurious_io_errors"))
               and os.environ.get("ORBATT_FAST_LOADS", "1") != "0")
 
 #: a compiled kernel (cached on disk)
@@ -171,6 +176,8 @@ BAD_LANE_SHIFT = 8     #: lockstep groups: ``(flags >> BAD_LANE_SHIFT) - 1`` is 
 #: calls pow) and by not calling ``math.hypot`` (CPython has its own, which differs from
 #: numba's in the last bit for ~1 % of arguments)
 INTERPRETED = bool(nb.config.DISABLE_JIT)
+#: compiled loops pass borrowed views (:func:`borrow`; a fast path of :mod:`orbatt.fast_paths`)
+BORROWED = _FAST_PATHS and not INTERPRETED
 
 if INTERPRETED:
     def borrow(arr):
@@ -179,6 +186,16 @@ if INTERPRETED:
 
     def keepalive(arr):
         """:func:`keepalive` of the compiled kernels: nothing to do in Python."""
+        return None
+elif not BORROWED:  # ORBATT_FAST_PATHS=0: reference-counted arrays, as numba passes them
+    @jit_inline
+    def borrow(arr):
+        """:func:`borrow` with the fast paths off: the array itself."""
+        return arr
+
+    @jit_inline
+    def keepalive(arr):
+        """:func:`keepalive` with the fast paths off: nothing to do."""
         return None
 else:
     @intrinsic

@@ -213,3 +213,77 @@ def spline_eval_many(table, t, ncomp):
         for k in range(ncomp):
             out[j, k] = v[k]
     return out
+
+
+@jit
+def not_a_knot_table(t, v):
+    """The spline table (layout above) of the not-a-knot cubic spline through ``v`` at ``t``.
+
+    The first derivatives ``s_i`` at the knots solve the tridiagonal system of scipy's
+    ``CubicSpline(t, v, bc_type="not-a-knot")`` (the same rows, the same right-hand sides),
+    eliminated without pivoting; each interval is then the cubic Hermite polynomial of its end
+    values and slopes, with scipy's formulas. On even steps (the environment tables) the banded
+    LU that scipy calls pivots on no row and the table is scipy's bit for bit; on uneven steps
+    the values and slopes agree to round-off (``tests/environment/test_environment_tables.py``).
+
+    Parameters
+    ----------
+    t : ndarray (N,)
+        Strictly increasing times, ``N >= 4`` (checked by the caller).
+    v : ndarray (N, ncomp)
+        Samples, ``ncomp <= 4``.
+
+    Returns
+    -------
+    ndarray (N, 1 + 4 ncomp)
+    """
+    n = t.shape[0]
+    ncomp = v.shape[1]
+    table = np.zeros((n, 1 + 4 * ncomp))
+    dx = np.empty(n - 1)
+    for i in range(n - 1):
+        dx[i] = t[i + 1] - t[i]
+    lower = np.empty(n)         # row i: lower[i] s[i-1] + diag[i] s[i] + upper[i] s[i+1] = b[i]
+    diag = np.empty(n)
+    upper = np.empty(n)
+    d0 = t[2] - t[0]
+    d1 = t[n - 1] - t[n - 3]
+    lower[0] = 0.0
+    diag[0] = dx[1]
+    upper[0] = d0
+    for i in range(1, n - 1):
+        lower[i] = dx[i]
+        diag[i] = 2.0 * (dx[i - 1] + dx[i])
+        upper[i] = dx[i - 1]
+    lower[n - 1] = d1
+    diag[n - 1] = dx[n - 3]
+    upper[n - 1] = 0.0
+    for i in range(1, n):       # forward elimination, shared by every component
+        f = lower[i] / diag[i - 1]
+        lower[i] = f
+        diag[i] = diag[i] - f * upper[i - 1]
+    slope = np.empty(n - 1)
+    b = np.empty(n)
+    for k in range(ncomp):
+        for i in range(n - 1):
+            slope[i] = (v[i + 1, k] - v[i, k]) / dx[i]
+        b[0] = ((dx[0] + 2.0 * d0) * dx[1] * slope[0] + dx[0] * dx[0] * slope[1]) / d0
+        for i in range(1, n - 1):
+            b[i] = 3.0 * (dx[i] * slope[i - 1] + dx[i - 1] * slope[i])
+        b[n - 1] = (dx[n - 2] * dx[n - 2] * slope[n - 3] + (2.0 * d1 + dx[n - 2]) * dx[n - 3] * slope[n - 2]) / d1
+        for i in range(1, n):
+            b[i] = b[i] - lower[i] * b[i - 1]
+        b[n - 1] = b[n - 1] / diag[n - 1]
+        for i in range(n - 2, -1, -1):      # back substitution: b holds the slopes s
+            b[i] = (b[i] - upper[i] * b[i + 1]) / diag[i]
+        c = 1 + 4 * k
+        for i in range(n - 1):
+            w = (b[i] + b[i + 1] - 2.0 * slope[i]) / dx[i]
+            table[i, c] = v[i, k]
+            table[i, c + 1] = b[i]
+            table[i, c + 2] = (slope[i] - b[i]) / dx[i] - w
+            table[i, c + 3] = w / dx[i]
+        table[n - 1, c] = v[n - 1, k]
+    for i in range(n):
+        table[i, 0] = t[i]
+    return table

@@ -18,8 +18,9 @@ compare with.
 from __future__ import annotations
 
 from ._jit import jit, jit_inline
-from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient, gradient_at, orbit_at, term_constants, term_value,
-                    terms_lanes)
+from .model import (GRAVITY_GRADIENT, HEAVY_TOP, gradient_at, orbit_at, term_constants,
+                    term_value, terms_lanes)
+from .evaluation import gradient_called
 from .qalg import qconj, qmul, qmul_pure
 
 
@@ -96,6 +97,7 @@ rhs = jit(_rhs)
 rhs_inline = jit_inline(_rhs)
 
 
+
 @jit
 def rhs_lanes(s, Y, nl, I, terms, params, table, work, G, dY):
     """Eq. (7) for lanes ``0..nl-1`` of ``Y (8, L)`` at the common ``s`` (the time, or the
@@ -142,5 +144,5 @@ def kinetic(y, inertia):
 @jit
 def energy(t, y, inertia, terms, params, table, work):
     """Hamiltonian ``H = T + U(q, t)``."""
-    u, _ = gradient(t, (y[0], y[1], y[2], y[3]), inertia, terms, params, table, work)
+    u, _ = gradient_called(t, (y[0], y[1], y[2], y[3]), inertia, terms, params, table, work)
     return kinetic(y, inertia) + u

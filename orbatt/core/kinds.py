@@ -19,7 +19,8 @@ gravity gradient       2     ``[GM]``; reads the orbit's ``r`` and radial unit v
 (eq. 20)                     (:func:`orbatt.core.potentials.gravity_gradient`)
 aerodynamic drag       3     :func:`~orbatt.core.model.drag_params`: the atmosphere's rotation rate
 of flat plates               and the facets of :mod:`orbatt.core.torques`; reads the orbit's position
-                             and velocity; table: the density (a torque: ``G = -2 q (0, tau)``)
+                             and velocity; table: the density, none for an exponential
+                             atmosphere (closed form) (a torque: ``G = -2 q (0, tau)``)
 solar radiation        4     :func:`~orbatt.core.model.srp_params`; table: the Sun's position
 pressure
 magnetic dipole        5     the body's dipole (3); table: the field ``B`` (inertial)

@@ -52,7 +52,7 @@ place of ``t`` and return ``dy/dE = dt/dE dy/dt`` with ``dt/dE = (1 - e cos E) /
 (:func:`orbatt.core.kepler.kepler_anomaly`), with no Kepler solve, and the terms that read the
 time get ``t(E) = (E - e sin E - M0) / n``. The Python drivers map the output times to
 anomalies once (``orbatt.methods.dop853``). The evaluation kernels (:func:`gradient`,
-:func:`evaluate_many`) take the time, with the Keplerian kind.
+:mod:`orbatt.core.evaluation`) take the time, with the Keplerian kind.
 
 The older kernel specification of a potential, ``(kind, params, table)`` with the kinds of
 :mod:`orbatt.core.potentials`, converts with :func:`from_spec`.
@@ -110,8 +110,11 @@ TABLE_TERMS = codes_where("table")
 #: the first slot of ``work`` given to tables (0..2: Kepler's warm start, 3: the sampled
 #: orbit); :data:`orbatt.core.potentials.WORK_SIZE` bounds the number of table terms
 FIRST_TABLE_SLOT = 4
-#: parameters of a drag term before its facets: ``[omega, nfacets]``
-DRAG_HEADER = 2
+#: parameters of a drag term before its facets: ``[omega, nfacets, density model, rho0, h0, H, R]``
+DRAG_HEADER = 7
+#: density models of the drag term: its table (a spline), or the exponential atmosphere in
+#: closed form (``rho0 exp(-(r - R - h0) / H)``, no table)
+DENSITY_TABLE, DENSITY_EXPONENTIAL = 0, 1
 #: parameters of an SRP term before its facets: ``[P1AU, AU, shadow, R_body, R_sun, nfacets]``
 SRP_HEADER = 6
 #: shadow models of the SRP term
@@ -237,7 +240,8 @@ def term_constants(j, t, terms, params, table, work, r, xhat, v):
     constants it needs at time ``t`` (read once per evaluation, outside any loop over
     members): gravity gradient ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``, drag
     ``(1/2 rho |v|^2, v^)``, SRP ``(P, s^)``, magnetic ``B`` (inertial). The environment
-    fields come from the term's spline table (:func:`orbatt.core.environment.spline_eval`)."""
+    fields come from the term's spline table (:func:`orbatt.core.environment.spline_eval`),
+    an exponential atmosphere's density from its formula at ``r``."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
     if kind == GRAVITY_GRADIENT:
@@ -256,7 +260,11 @@ def _environment_constants(kind, t, tab, slot, work, params, p0, r, xhat, v):
     and called (not inlined: inlining them into every step loop multiplied the compile time
     of every run, which mostly does not use them)."""
     if kind == DRAG:
-        return _drag_constants(env.spline_eval(tab, t, 1, slot, work)[0], params, p0, r, xhat, v)
+        if params[p0 + 2] == DENSITY_EXPONENTIAL:
+            rho = params[p0 + 3] * math.exp(-((r - params[p0 + 6]) - params[p0 + 4]) / params[p0 + 5])
+        else:
+            rho = env.spline_eval(tab, t, 1, slot, work)[0]
+        return _drag_constants(rho, params, p0, r, xhat, v)
     elif kind == SRP:
         return _srp_constants(env.spline_eval(tab, t, 3, slot, work), params, p0, r, xhat)
     b = env.spline_eval(tab, t, 3, slot, work)
@@ -316,6 +324,7 @@ def gradient(t, q, inertia, terms, params, table, work):
     attitude ``q`` (4-tuple); ``(0, 0)`` for an empty model."""
     _, U, G = gradient_at(t, q, inertia, terms, params, table, work)
     return U, G
+
 
 
 @jit_inline
@@ -379,111 +388,6 @@ def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
     return True
 
 
-@jit
-def evaluate_terms(t, q, inertia, terms, params, table, work):
-    """Each term alone: ``U (N, n)`` and the body torque ``tau (N, n, 3)`` of the ``n`` terms
-    at the times ``t (N,)`` and attitudes ``q (N, 4)`` (for the per-term outputs of a
-    result; ``tau = -1/2 Im(q~ G)``)."""
-    n = q.shape[0]
-    nt = terms.shape[0] - 1
-    U = np.zeros((n, nt))
-    tau = np.zeros((n, nt, 3))
-    inertia_t = (inertia[0], inertia[1], inertia[2])
-    if nt == 0:
-        return U, tau
-    for i in range(n):
-        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
-        for j in range(1, nt + 1):
-            kind, p0, c = term_constants(j, t[i], terms, params, table, work, r, xhat, v)
-            u, g = term_value(kind, p0, c, qi, inertia_t, params)
-            U[i, j - 1] = u
-            tq = pot.torque_from_gradient(qi, g)
-            for k in range(3):
-                tau[i, j - 1, k] = tq[k]
-    return U, tau
-
-
-@jit
-def evaluate_many(t, q, inertia, terms, params, table, work):
-    """``U (N,)``, ``G (N, 4)`` and the body torque ``tau (N, 3)`` of the model at the times
-    ``t (N,)`` and attitudes ``q (N, 4)``."""
-    n = q.shape[0]
-    U = np.empty(n)
-    grad = np.empty((n, 4))
-    tau = np.empty((n, 3))
-    inertia_t = (inertia[0], inertia[1], inertia[2])
-    for i in range(n):
-        qi = (q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        u, g = gradient(t[i], qi, inertia_t, terms, params, table, work)
-        U[i] = u
-        tq = pot.torque_from_gradient(qi, g)
-        for k in range(4):
-            grad[i, k] = g[k]
-        for k in range(3):
-            tau[i, k] = tq[k]
-    return U, grad, tau
-
-
-@jit
-def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
-    """Ensemble members each as alone: ``U (E, N)`` (:func:`evaluate_many`) and (``want_tau``)
-    the torques ``tau (E, N, n, 3)`` of the ``n`` terms (``per_term``, :func:`evaluate_terms`)
-    or their total (``n = 1``), at the times ``t (N,)`` and attitudes ``q (E, N, 4)`` of members
-    of moments ``inertia (E, 3)``. The orbit and the terms' constants are computed once, from
-    fresh scratch over the times in order, as the one-member kernels compute them for each
-    member: each member gets their numbers (summed as :func:`terms_at` sums)."""
-    n_members = q.shape[0]
-    n = t.shape[0]
-    nt = terms.shape[0] - 1
-    U = np.empty((n_members, n))
-    tau = np.empty((n_members, n, nt if per_term else 1, 3))
-    if nt == 0:  # no term: the one-member kernels' zeros, member by member
-        for e in range(n_members):
-            u, _, total = evaluate_many(t, q[e], inertia[e], terms, params, table, np.full(pot.WORK_SIZE, np.nan))
-            U[e] = u
-            if want_tau and not per_term:
-                tau[e, :, 0] = total
-        return U, tau
-    kinds = np.empty(nt, dtype=np.int64)
-    starts = np.empty(nt, dtype=np.int64)
-    consts = np.empty((n, nt, 4))
-    work = np.full(pot.WORK_SIZE, np.nan)
-    for i in range(n):
-        r, xhat, v = orbit_radial(t[i], terms, params, table, work)
-        for j in range(nt):
-            kind, p0, c = term_constants(j + 1, t[i], terms, params, table, work, r, xhat, v)
-            kinds[j] = kind
-            starts[j] = p0
-            for k in range(4):
-                consts[i, j, k] = c[k]
-    for e in range(n_members):
-        inertia_t = (inertia[e, 0], inertia[e, 1], inertia[e, 2])
-        for i in range(n):
-            qi = (q[e, i, 0], q[e, i, 1], q[e, i, 2], q[e, i, 3])
-            u_sum = 0.0
-            g_sum = (0.0, 0.0, 0.0, 0.0)
-            for j in range(nt):
-                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3])
-                u, g = term_value(kinds[j], starts[j], c, qi, inertia_t, params)
-                if j == 0:  # as terms_at: the sum starts from the first term's value
-                    u_sum = u
-                    g_sum = g
-                else:
-                    u_sum += u
-                    g_sum = (g_sum[0] + g[0], g_sum[1] + g[1], g_sum[2] + g[2], g_sum[3] + g[3])
-                if want_tau and per_term:
-                    tq = pot.torque_from_gradient(qi, g)
-                    for k in range(3):
-                        tau[e, i, j, k] = tq[k]
-            U[e, i] = u_sum
-            if want_tau and not per_term:
-                tq = pot.torque_from_gradient(qi, g_sum)
-                for k in range(3):
-                    tau[e, i, 0, k] = tq[k]
-    return U, tau
-
-
 # ---------------------------------------------------------------------------------------
 # Building models (Python)
 
@@ -534,8 +438,9 @@ def build(orbit=None, terms=()):
     if sum(1 for k in spec[1:, KIND] if k == WHEELS) > 1:
         raise ValueError("at most one row of reaction wheels")
     slot = FIRST_TABLE_SLOT
-    for row in spec[1:]:
-        if int(row[KIND]) in TABLE_TERMS or (int(row[KIND]) == PD_CONTROL and row[R1] > row[R0]):
+    for row in spec[1:]:  # a PD law's table is optional, a drag term's too with a closed-form density
+        optional = int(row[KIND]) == PD_CONTROL or (int(row[KIND]) == DRAG and params[row[P0] + 2] != DENSITY_TABLE)
+        if (int(row[KIND]) in TABLE_TERMS and not optional) or (optional and row[R1] > row[R0]):
             if row[R1] - row[R0] < 2:
                 raise ValueError(f"term kind {int(row[KIND])} needs a spline table of at least 2 rows")
             if slot >= pot.WORK_SIZE:
@@ -545,13 +450,16 @@ def build(orbit=None, terms=()):
     return spec, params, table
 
 
-def drag_params(facets, omega):
+def drag_params(facets, omega, exponential=None):
     """The parameters of a :data:`DRAG` term: the atmosphere's rotation rate ``omega`` (rad per
-    time unit about inertial axis 3; 0: a still atmosphere) and the facets
-    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). Its table:
-    the density along the orbit (one component; kg per volume unit)."""
+    time unit about inertial axis 3; 0: a still atmosphere), the density model and the facets
+    ``(F, FACET_SIZE)`` of :mod:`orbatt.core.torques` (coefficient ``C_D A``). ``exponential``
+    None: the density is the term's table (one component, kg per volume unit, along the
+    orbit); else ``(rho0, h0, H, R)``, the exponential atmosphere in closed form (kg per volume
+    unit, lengths; ``h = |r| - R``) and no table."""
     facets = np.asarray(facets, dtype=np.float64).reshape(-1, trq.FACET_SIZE)
-    return np.concatenate([[omega, facets.shape[0]], facets.ravel()])
+    model = [DENSITY_TABLE, 0.0, 0.0, 1.0, 0.0] if exponential is None else [DENSITY_EXPONENTIAL, *exponential]
+    return np.concatenate([[omega, facets.shape[0]], np.asarray(model, dtype=np.float64), facets.ravel()])
 
 
 def srp_params(facets, pressure_1au, au, shadow, body_radius, sun_radius):

@@ -275,15 +275,19 @@ def _split_step(q, Q, t, h, flow, weight, toff, axes, coef, inertia, terms, para
 @jit_inline
 def _rk4_step(y, t, h, inertia, terms, params, table, work, K, ytmp):
     """Classical RK4 step, in place on ``y`` (4 RHS evaluations into ``K (4, 8)``), with one
-    inlined right-hand side (a loop over the stages)."""
+    inlined right-hand side (a loop over the stages, one call site: every inlined site costs
+    its type inference and lowering again)."""
     for s in range(4):
+        ts = t
         if s == 0:
-            rhs_inline(t, y, inertia, terms, params, table, work, K[0])
+            for i in range(NDIM):
+                ytmp[i] = y[i]
         else:
             a = RK4_NODES[s]
+            ts = t + a * h
             for i in range(NDIM):
                 ytmp[i] = y[i] + a * h * K[s - 1, i]
-            rhs_inline(t + a * h, ytmp, inertia, terms, params, table, work, K[s])
+        rhs_inline(ts, ytmp, inertia, terms, params, table, work, K[s])
     for i in range(NDIM):
         y[i] += h / 6.0 * (K[0, i] + 2.0 * (K[1, i] + K[2, i]) + K[3, i])
 

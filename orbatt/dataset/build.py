@@ -60,6 +60,7 @@ from ..errors import InputError
 from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
 from ..potentials import energy_and_torques, evaluate_members
+from ..terms import FIELD_VARIABLES
 from ..units import DIMENSIONLESS_UNITS, INTERNAL_UNITS, LEGACY_OUTPUT
 from ..version import __version__
 from .content import Content, Var
@@ -507,12 +508,6 @@ def si_form(variables):
 
 #: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m
 _TORQUE_TO_N_M = 1e6
-_FIELD_VARIABLES = {
-    "density": ((), "kg m^-3", "atmospheric density along the orbit", {}),
-    "magnetic_field": (("axis",), "T", "geomagnetic field along the orbit (inertial components)", {"frame": "S"}),
-    "sun_direction": (("axis",), "1", "unit vector from the body to the Sun (inertial components)", {"frame": "S"}),
-    "shadow": ((), "1", "shadow function: 0 = umbra ... 1 = full Sun", {}),
-}
 
 
 def _torque_variables(potential, tau, t, tdims):
@@ -533,6 +528,6 @@ def _torque_variables(potential, tau, t, tdims):
         out[f"torque_{n}"] = _var(vv, np.ascontiguousarray(tau[..., k, :]), "N m",
                                          f"{n.replace('_', ' ')} torque on the body (body components)", frame="B")
     for key, values in potential.fields(t).items():
-        dims, unit, long_name, extra = _FIELD_VARIABLES[key]
+        dims, unit, long_name, extra = FIELD_VARIABLES[key]
         out[key] = _var(("time",) + dims, values, unit, long_name, **extra)
     return out

@@ -159,8 +159,8 @@ def wheel_limits(ds):
     wheels = (spec.control or {}).get("wheels") if spec is not None else None
     if not wheels or "wheel" not in ds.sizes or len(wheels) != ds.sizes["wheel"]:
         return None
-    speed = [np.nan if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels]
-    torque = [np.nan if getattr(w, "max_torque_n_m", None) is None else w.max_torque_n_m for w in wheels]
+    speed = [np.nan if w["max_speed"] is None else w["max_speed"] for w in wheels]
+    torque = [np.nan if w.get("max_torque") is None else w["max_torque"] for w in wheels]
     return np.asarray(speed, dtype=np.float64), np.asarray(torque, dtype=np.float64)
 
 

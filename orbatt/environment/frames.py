@@ -27,7 +27,7 @@ from .. import units as U
 from ..errors import InputError
 
 __all__ = ["offline_iers", "load_earth_orientation", "earth_orientation_cache", "as_time_array", "as_vectors",
-           "rotation_gcrs_to_itrs", "rotation_gcrs_to_itrs_astropy", "gcrs_to_itrs", "itrs_to_gcrs", "geodetic",
+           "rotation_gcrs_to_itrs", "rotation_gcrs_to_itrs_astropy", "celestial_to_intermediate", "gcrs_to_itrs", "itrs_to_gcrs", "geodetic",
            "EARTH_ROTATION_RATE", "R_EARTH_WGS84", "DatesWarning", "one_dates_warning"]
 
 #: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
@@ -208,7 +208,9 @@ def rotation_gcrs_to_itrs(t):
     precession, nutation, Earth rotation angle, polar motion) at the instants' TT and UT1, with
     the polar motion of astropy's bundled IERS table: what astropy's ``GCRS -> ITRS`` transform
     of a geocentric position computes (agreement 3e-16 on a day of minutes), ~20x faster than
-    transforming basis vectors with astropy. Instants outside the IERS table go through
+    transforming basis vectors with astropy; for many instants the bias-precession-nutation
+    part comes from :func:`celestial_to_intermediate`'s nodes (another ~30x on a table of a day
+    at 20 s; round-off level). Instants outside the IERS table go through
     astropy's transform (its extrapolation and warnings).
 
     Parameters
@@ -230,11 +232,57 @@ def rotation_gcrs_to_itrs(t):
             xp, yp, status = iers.earth_orientation_table.get().pm_xy(t, return_status=True)
             if np.all(np.asarray(status) >= 0):  # every instant inside the table
                 tt, ut1 = t.tt, t.ut1
-                R = erfa.c2t06a(tt.jd1, tt.jd2, ut1.jd1, ut1.jd2, xp.to_value(u.rad), yp.to_value(u.rad))
+                # erfa.c2t06a, its steps spelled out (the same bits) with the slowly varying
+                # celestial-to-intermediate matrix from celestial_to_intermediate
+                rpom = erfa.pom00(xp.to_value(u.rad), yp.to_value(u.rad), erfa.sp00(tt.jd1, tt.jd2))
+                R = erfa.c2tcio(celestial_to_intermediate(tt.jd1, tt.jd2), erfa.era00(ut1.jd1, ut1.jd2), rpom)
                 return np.ascontiguousarray(np.broadcast_to(R, (t.shape[0], 3, 3)))
         except (ValueError, IndexError):  # astropy's own path below says what is wrong
             pass
     return rotation_gcrs_to_itrs_astropy(t)
+
+
+#: spacing (days) of the nodes at which :func:`celestial_to_intermediate` evaluates ERFA's
+#: ``c2i06a`` for many instants (10 minutes; the shortest nutation periods are ~5 days)
+C2I_NODE_STEP = 600.0 / 86400.0
+#: fewer instants than this: ``c2i06a`` at each
+C2I_DIRECT_BELOW = 64
+
+
+def celestial_to_intermediate(jd1, jd2):
+    """The celestial-to-intermediate matrix (IAU 2006/2000A: bias, precession, nutation;
+    ``erfa.c2i06a``) at TT Julian dates ``jd1 + jd2``, shape ``(N, 3, 3)``.
+
+    ``c2i06a`` sums the 1365-term nutation series (~45 us per instant, nearly all of an
+    environment table's frame cost). The matrix changes slowly (precession, nutation periods of
+    5 days and more), so for many instants it is evaluated at nodes every
+    :data:`C2I_NODE_STEP` over their span and each element is interpolated by the not-a-knot
+    cubic spline of the environment tables: the interpolation error is below 1e-18 (a term of
+    period P and amplitude A: ~ 5/384 A (2 pi h / P)^4), so the result agrees with ``c2i06a``
+    at each instant to round-off (<= 1e-15; ``tests/environment/test_frames.py``).
+    """
+    import erfa
+
+    from ..core.environment import not_a_knot_table
+
+    jd1 = np.asarray(jd1, dtype=np.float64)
+    jd2 = np.asarray(jd2, dtype=np.float64)
+    x = (jd1 - jd1[0]) + (jd2 - jd2[0])         # days since the first instant
+    lo, hi = float(np.min(x)), float(np.max(x))
+    n = int(np.ceil((hi - lo) / C2I_NODE_STEP)) + 1
+    if x.shape[0] < max(C2I_DIRECT_BELOW, 2 * n) or not np.all(np.isfinite(x)):
+        return erfa.c2i06a(jd1, jd2)
+    n = max(n, 4)
+    nodes = np.linspace(lo, hi, n)
+    m = erfa.c2i06a(np.full(n, jd1[0]), jd2[0] + nodes).reshape(n, 9)
+    h = nodes[1] - nodes[0]
+    i = np.clip(np.floor((x - lo) / h).astype(np.int64), 0, n - 2)
+    s = (x - nodes[i])[:, None]
+    out = np.empty((x.shape[0], 9))
+    for k in range(0, 9, 3):                   # tables of at most 4 components
+        c = not_a_knot_table(nodes, np.ascontiguousarray(m[:, k:k + 3]))[i]
+        out[:, k:k + 3] = c[:, 1::4] + s * (c[:, 2::4] + s * (c[:, 3::4] + s * c[:, 4::4]))
+    return out.reshape(-1, 3, 3)
 
 
 def rotation_gcrs_to_itrs_astropy(t):
@@ -251,7 +299,7 @@ def rotation_gcrs_to_itrs_astropy(t):
     return np.ascontiguousarray(x.reshape(n, 3, 3).transpose(0, 2, 1))
 
 
-def gcrs_to_itrs(t, r_gcrs_km):
+def gcrs_to_itrs(t, r_gcrs_km, rotation=None):
     """Geocentric GCRS positions (or free vectors) to ITRS components.
 
     Parameters
@@ -260,6 +308,9 @@ def gcrs_to_itrs(t, r_gcrs_km):
         Instants, shape ``(N,)`` (or scalar).
     r_gcrs_km : array_like (N, 3)
         GCRS components (km for positions; any unit for a free vector).
+    rotation : ndarray (N, 3, 3), optional
+        :func:`rotation_gcrs_to_itrs` of ``t`` when the caller has it already (one ERFA
+        evaluation for a round trip; ~45 us per instant).
 
     Returns
     -------
@@ -268,10 +319,10 @@ def gcrs_to_itrs(t, r_gcrs_km):
     """
     r = as_vectors(r_gcrs_km, "r_gcrs_km", u.km)
     t = as_time_array(t, r.shape[0])
-    return np.einsum("nij,nj->ni", rotation_gcrs_to_itrs(t), r)
+    return np.einsum("nij,nj->ni", rotation_gcrs_to_itrs(t) if rotation is None else rotation, r)
 
 
-def itrs_to_gcrs(t, v_itrs):
+def itrs_to_gcrs(t, v_itrs, rotation=None):
     """ITRS components of vectors (a field, a position) to GCRS components: the inverse
     rotation of :func:`gcrs_to_itrs` (a free vector is rotated, not translated).
 
@@ -281,6 +332,8 @@ def itrs_to_gcrs(t, v_itrs):
         Instants, shape ``(N,)`` (or scalar).
     v_itrs : array_like (N, 3)
         ITRS components, any unit (plain numbers).
+    rotation : ndarray (N, 3, 3), optional
+        :func:`rotation_gcrs_to_itrs` of ``t`` when the caller has it already.
 
     Returns
     -------
@@ -289,7 +342,7 @@ def itrs_to_gcrs(t, v_itrs):
     """
     v = as_vectors(v_itrs, "v_itrs")
     t = as_time_array(t, v.shape[0])
-    return np.einsum("nji,nj->ni", rotation_gcrs_to_itrs(t), v)
+    return np.einsum("nji,nj->ni", rotation_gcrs_to_itrs(t) if rotation is None else rotation, v)
 
 
 def geodetic(t, r_gcrs_km):
@@ -305,14 +358,38 @@ def geodetic(t, r_gcrs_km):
     Returns
     -------
     lat_deg, lon_deg, alt_km : ndarray (N,)
-        Geodetic latitude (deg), east longitude in ``(-180, 180]`` (deg) and height above
+        Geodetic latitude (deg), east longitude in ``[-180, 180)`` (deg) and height above
         the WGS84 ellipsoid (km).
     """
-    from astropy.coordinates import EarthLocation
+    import erfa
 
     x = gcrs_to_itrs(t, r_gcrs_km)
-    loc = EarthLocation.from_geocentric(x[:, 0], x[:, 1], x[:, 2], unit=u.km)
-    lon, lat, h = loc.to_geodetic("WGS84")
-    return (np.asarray(lat.to_value(u.deg), dtype=np.float64),
-            np.asarray(lon.wrap_at(180 * u.deg).to_value(u.deg), dtype=np.float64),
-            np.asarray(h.to_value(u.km), dtype=np.float64))
+    # astropy's EarthLocation.to_geodetic("WGS84") without importing astropy.coordinates, the
+    # same operations (tests/environment/test_frames.py): ERFA's gc2gde in metres, the
+    # longitude wrapped to [0, 2 pi) rad, then to [-180, 180) deg, as astropy's Longitude does
+    lon, lat, h = erfa.gc2gde(WGS84_A_M, WGS84_F, x * 1000.0)
+    lon = _wrap(_wrap(lon, _RAD_360, _RAD_360) * _DEG_PER_RAD, 180.0, 360.0)
+    return (np.asarray(lat * _DEG_PER_RAD, dtype=np.float64), np.asarray(lon, dtype=np.float64),
+            np.asarray(h * 0.001, dtype=np.float64))
+
+
+#: WGS84 ellipsoid: equatorial radius (m) and flattening, astropy's and ERFA's values
+WGS84_A_M = 6378137.0
+WGS84_F = 1.0 / 298.257223563
+#: astropy's unit scales: rad -> deg, and 360 deg in rad
+_DEG_PER_RAD = 57.29577951308232
+_RAD_360 = 360.0 * 0.017453292519943295
+
+
+def _wrap(angle, wrap_angle, full):
+    """Angles wrapped into ``[wrap_angle - full, wrap_angle)``: astropy's ``Angle.wrap_at``
+    arithmetic (the same bits)."""
+    floor = wrap_angle - full
+    out = np.array(angle, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        wraps = (out - floor) // full
+    if np.any(np.isfinite(wraps) & (wraps != 0)):
+        out -= wraps * full
+        out[out >= wrap_angle] -= full
+        out[out < floor] += full
+    return out

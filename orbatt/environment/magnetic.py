@@ -12,7 +12,8 @@ interpolated linearly in time between epochs as ``ppigrf`` does; reference radiu
 
 * :class:`IGRFField` - the full expansion (degrees 1-13). It evaluates the series of
   ``ppigrf.igrf_gc`` (geocentric radius, colatitude, longitude; Schmidt semi-normalized
-  Legendre functions from ``ppigrf.ppigrf.get_legendre``) with the coefficients of *each* instant,
+  Legendre functions of ``ppigrf.ppigrf.get_legendre``, computed the same way by
+  :func:`~orbatt.environment.spherical_harmonics.schmidt_legendre`) with the coefficients of *each* instant,
   which ``ppigrf.igrf_gc`` would do only on a dates x points grid. ``(B_r, B_theta, B_phi)``
   (radial, south, east) become ITRS Cartesian components with the spherical unit vectors at
   the point.
@@ -28,7 +29,8 @@ import numpy as np
 
 from ..epoch import parse_epoch
 from ..errors import InputError
-from .frames import as_time_array, as_vectors, gcrs_to_itrs, itrs_to_gcrs
+from .frames import as_time_array, as_vectors, gcrs_to_itrs, itrs_to_gcrs, rotation_gcrs_to_itrs
+from .spherical_harmonics import igrf14_file, read_shc, schmidt_legendre
 
 __all__ = ["GeomagneticField", "IGRFField", "DipoleField", "igrf_coefficients", "check_igrf_instants",
            "IGRF_REFERENCE_RADIUS", "IGRF_SPAN"]
@@ -45,13 +47,9 @@ _BLOCK = 4096
 
 def _coefficient_table():
     """``(t_utc_unix_seconds, g, h, keys)`` of ppigrf's IGRF-14 file: ``g``, ``h`` of shape
-    ``(n_epochs, n_coefficients)`` (nT), ``keys`` the ``(n, m)`` of each column."""
-    from ppigrf.ppigrf import read_shc, shc_fn_igrf14
-
-    g, h = read_shc(shc_fn_igrf14)
-    times = g.index.values.astype("datetime64[ns]").astype(np.int64) / 1e9
-    keys = [tuple(int(x) for x in k) for k in g.columns]
-    return times, g.values.astype(np.float64), h.values.astype(np.float64), keys
+    ``(n_epochs, n_coefficients)`` (nT), ``keys`` the ``(n, m)`` of each column (read without
+    importing ppigrf and pandas: :mod:`orbatt.environment.spherical_harmonics`)."""
+    return read_shc(igrf14_file())
 
 
 _TABLE = None
@@ -126,12 +124,10 @@ def _spherical(x):
 def _series(r, theta_deg, phi_deg, g, h, keys):
     """``(B_r, B_theta, B_phi)`` (nT) of the spherical-harmonic series, one coefficient row
     per point: the formulas of ``ppigrf.igrf_gc``."""
-    from ppigrf.ppigrf import get_legendre
-
     a = IGRF_REFERENCE_RADIUS
     n = np.array([k[0] for k in keys], dtype=np.float64)[None, :]
     m = np.array([k[1] for k in keys], dtype=np.float64)[None, :]
-    P, dP = get_legendre(theta_deg, keys)
+    P, dP = schmidt_legendre(theta_deg, keys)
     phi = np.radians(phi_deg)[:, None]
     cmp, smp = np.cos(m * phi), np.sin(m * phi)
     ratio = (a / r)[:, None]
@@ -169,7 +165,8 @@ class GeomagneticField:
         r = as_vectors(r_gcrs_km, "r_gcrs_km")
         t = as_time_array(t, r.shape[0])
         self.check_instants(t)
-        return itrs_to_gcrs(t, self.field_itrs(t, gcrs_to_itrs(t, r)))
+        rot = rotation_gcrs_to_itrs(t)      # once for both ways
+        return itrs_to_gcrs(t, self.field_itrs(t, gcrs_to_itrs(t, r, rot)), rot)
 
 
 class IGRFField(GeomagneticField):

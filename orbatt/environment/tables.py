@@ -3,7 +3,8 @@
 The orbit is prescribed, so density, magnetic field and Sun position depend on time alone
 along it (``docs/design.md`` §10). They are evaluated by their libraries at evenly spaced
 samples (:func:`sample_along_orbit`) and turned into per-interval cubic polynomials
-(:func:`spline_table`, scipy's not-a-knot ``CubicSpline``) that
+(:func:`spline_table`, the not-a-knot cubic spline of scipy's ``CubicSpline``, computed by
+:func:`orbatt.core.environment.not_a_knot_table` without importing scipy) that
 :func:`orbatt.core.environment.spline_eval` evaluates in the compiled right-hand side.
 
 Default sampling steps and the interpolation error they give: the largest difference
@@ -116,7 +117,7 @@ def spline_table(t, values):
         holds ``t_{N-1}`` and the end values in ``c0`` (layout of
         :mod:`orbatt.core.environment`).
     """
-    from scipy.interpolate import CubicSpline
+    from ..core.environment import not_a_knot_table
 
     t = np.asarray(t, dtype=np.float64)
     v = np.asarray(values, dtype=np.float64)
@@ -129,14 +130,7 @@ def spline_table(t, values):
         raise InputError("t: need at least 4 strictly increasing times for a cubic spline table")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
         raise InputError("values: contains non-finite samples")
-    n, ncomp = v.shape
-    c = CubicSpline(t, v, bc_type="not-a-knot").c      # (4, n - 1, ncomp), highest power first
-    table = np.zeros((n, 1 + 4 * ncomp))
-    table[:, 0] = t
-    for k in range(ncomp):
-        table[:-1, 1 + 4 * k:5 + 4 * k] = c[::-1, :, k].T
-        table[-1, 1 + 4 * k] = v[-1, k]
-    return table
+    return not_a_knot_table(np.ascontiguousarray(t), np.ascontiguousarray(v))
 
 
 def tabulate(samples, evaluate):

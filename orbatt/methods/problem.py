@@ -7,17 +7,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
 from .. import canonical as cn
 from .. import units as U
 from ..body import RigidBody
-from ..control import extend_model, wheels_row
 from ..core import model as km
 from ..core.dop853 import NDIM
 from ..errors import InputError
+from ..model_assembly import KernelSpec, assemble
 from ..state import State
 
 __all__ = ["Problem", "KernelSpec", "kernel_spec", "check_extended", "bodies_of", "initial_states", "time_span", "method_settings",
@@ -32,15 +31,6 @@ MAX_RTOL = 0.1
 #: largest atol accepted: the quaternion has |q| = 1, so an absolute error above 1 leaves the
 #: attitude uncontrolled (the momentum is controlled by rtol; give atol in its unit below 1)
 MAX_ATOL = 1.0
-
-
-class KernelSpec(NamedTuple):
-    """The model as the compiled kernels take it (the term list of :mod:`orbatt.core.model`),
-    always passed to them together and in this order (``*spec``)."""
-
-    terms: np.ndarray
-    params: np.ndarray
-    table: np.ndarray
 
 
 @dataclass
@@ -157,35 +147,10 @@ def initial_states(state0, bodies):
 
 
 def kernel_spec(potential, bodies) -> KernelSpec:
-    """The :class:`KernelSpec` of ``potential``, after its ``check_body`` (if any) accepted
-    every body: its ``kernel_model()`` (:class:`orbatt.potentials.Potential`), or the model of
-    its kernel specification ``kind``, ``params``, ``table`` (any object that has them;
-    :func:`orbatt.core.model.from_spec`). The arrays are writeable C-contiguous: one numba
-    specialization of every kernel."""
-    if not all(hasattr(potential, a) for a in ("kind", "params", "table")):
-        raise InputError(f"potential: expected an orbatt Potential (with kind, params, table), got "
-                         f"{type(potential).__name__}")
-    if hasattr(potential, "check_body"):
-        for b in set(bodies):
-            potential.check_body(b)
-    table = np.asarray(potential.table, dtype=np.float64)
-    if table.ndim != 2:
-        raise InputError(f"potential.table: expected a 2-D array, got shape {table.shape}")
-    if hasattr(potential, "kernel_model"):
-        model = potential.kernel_model()  # built once per potential, fresh copies
-    else:
-        try:  # from_spec copies params and table into fresh arrays
-            model = km.from_spec(int(potential.kind), potential.params, table)
-        except ValueError as exc:
-            raise InputError(f"potential: {exc}") from None
-    wheels = bodies[0].wheels
-    control = getattr(potential, "control", None)
-    if wheels or control is not None:
-        rows = [wheels_row(wheels)] if wheels else []
-        if control is not None:
-            rows.append(potential.control_row(wheels))
-        model = extend_model(model, rows)
-    return KernelSpec(*model)
+    """The :class:`KernelSpec` of ``potential`` acting on ``bodies``: the one assembler,
+    :func:`orbatt.model_assembly.assemble` (the potential's orbit and terms, the wheels, the
+    control law)."""
+    return assemble(potential, bodies)
 
 
 def check_extended(cls, kernel):

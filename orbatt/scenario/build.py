@@ -15,6 +15,7 @@ from astropy import units as u
 
 from .. import quaternion as qt
 from .. import units as U
+from ..control import control_law
 from ..errors import InputError, IntegrationError, ScenarioError
 from ..methods.problem import DEFAULT_MAX_STEPS
 from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit
@@ -22,8 +23,9 @@ from ..potentials import GravityGradient, HeavyTop, TorqueFree
 from ..environment.atmosphere import NRLMSIS, ExponentialAtmosphere, PiecewiseExponentialAtmosphere
 from ..environment.magnetic import DipoleField, IGRFField
 from ..state import State
-from ..torques import EnvironmentTorques, sample_margin
+from ..torques import EnvironmentTorques, facet, sample_margin
 from ..orbital import state_from_orbital
+from .torques_schema import torque_arguments
 from .work import torque_rates
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
@@ -107,11 +109,11 @@ def environment_margin(spec):
     tq, c = spec.torques, spec.control
     if tq is None and (c is None or c["control"] is None):
         return 0.0
-    law = None if c is None else c["control"]
+    law = (None if c is None else c["control"]) or {}
     return sample_margin(drag=tq is not None and tq["drag"], srp=tq is not None and tq["srp"],
                          magnetic=(tq is not None and tq["residual_dipole"] is not None)
                          or (c is not None and c["magnetic_field"] is not None),
-                         sun=getattr(law, "target", None) == "sun")
+                         sun=law.get("target") == "sun")
 
 
 def check_field_span(ctx, spec, t_end):
@@ -176,16 +178,15 @@ def build_environment_torques(spec, orbit, t_end):
             atmosphere = PiecewiseExponentialAtmosphere()
     if tq["residual_dipole"] is not None:
         field = IGRFField() if env["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    dipole = None if tq["residual_dipole"] is None else tq["residual_dipole"] * u.A * u.m**2
-    control = None if spec.control is None else spec.control["control"]
+    law = None if spec.control is None else spec.control["control"]
+    control = None if law is None else control_law(law)
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    constant = None if tq.get("constant") is None else tq["constant"] * u.N * u.m
     gg = spec.potential_kind == "gravity-gradient"
-    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None, facets=tq["facets"],
-                              gravity_gradient=gg, drag=tq["drag"], srp=tq["srp"], residual_dipole=dipole,
-                              atmosphere=atmosphere, magnetic_field=field, shadow=env["shadow"],
-                              corotation=env["corotation"], control=control, constant_torque=constant)
+    return EnvironmentTorques(orbit if gg else None, t_end * u.s if gg else None,
+                              facets=[facet(f) for f in tq["facets"]], gravity_gradient=gg, atmosphere=atmosphere,
+                              magnetic_field=field, shadow=env["shadow"], corotation=env["corotation"], control=control,
+                              **torque_arguments(tq))
 
 
 def build_control(spec, orbit, t_end):
@@ -196,7 +197,8 @@ def build_control(spec, orbit, t_end):
     field = None
     if c["magnetic_field"] is not None:
         field = IGRFField() if c["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
-    return EnvironmentTorques(orbit, t_end * u.s, gravity_gradient=True, magnetic_field=field, control=c["control"])
+    return EnvironmentTorques(orbit, t_end * u.s, gravity_gradient=True, magnetic_field=field,
+                              control=control_law(c["control"]))
 
 
 def build_potential(spec, orbit, t_end=None):

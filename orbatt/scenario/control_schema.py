@@ -27,24 +27,20 @@ right-hand side).
 """
 from __future__ import annotations
 
-import numpy as np
 from astropy import units as u
 
-from ..control import BDotControl, PDControl, ReactionWheel, wheel_axes_span
+from ..control import ACTUATORS, LAWS, TARGETS, control_law, reaction_wheel
 from ..errors import InputError
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
 from .ranges import RANGES
 from .torques_schema import check_field_epoch
 
-__all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "LAWS", "parse_control"]
+__all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "LAW_PARSERS", "parse_control"]
 
-CONTROL_KEYS = {"law", "target", "target_q", "target_axis", "kp", "kd", "max_torque", "actuator", "gain",
-                "max_dipole"}
+#: the [control] keys: law and the keys of every law (orbatt.control.LAWS)
+CONTROL_KEYS = {"law"}.union(*(cls.UNITS for cls in LAWS.values()))
 WHEEL_KEYS = {"axis", "inertia", "speed", "max_torque", "max_speed"}
-LAWS = ("pd", "bdot")
-PD_KEYS = {"law", "target", "target_q", "target_axis", "kp", "kd", "max_torque", "actuator"}
-BDOT_KEYS = {"law", "gain", "max_dipole"}
 RATE = u.rad / u.s
 
 
@@ -62,7 +58,17 @@ def _positive(ctx, where, raw, unit, key):
     return v
 
 
+def _api_error(ctx, where, exc):
+    """The :class:`~orbatt.errors.ScenarioError` of an API object's ``exc`` (``"key: message"``):
+    the key inside the table ``where`` (``"[control]"``, ``"[[body.wheels]] 2"``), or a
+    table-qualified key (``"[[body.wheels]] axis"``) as it is."""
+    key, _, msg = str(exc).partition(": ")
+    return ctx.error(key if key.startswith("[") else f"{where} {key}", msg)
+
+
 def _wheels(ctx, raw):
+    """The plain settings of the wheels (:meth:`~orbatt.control.ReactionWheel.settings`),
+    each checked by :class:`~orbatt.control.ReactionWheel` (the key named)."""
     if not isinstance(raw, list) or not all(isinstance(w, dict) for w in raw):
         raise ctx.error("[[body.wheels]]", "must be an array of tables ([[body.wheels]] ...)")
     out = []
@@ -74,33 +80,90 @@ def _wheels(ctx, raw):
         for key in ("axis", "inertia"):
             if key not in w:
                 raise ctx.error(f"{where} {key}", "missing; a wheel needs axis and inertia")
-        axis = parse_plain_vector(ctx, f"{where} axis", w["axis"], 3)
-        inertia = _positive(ctx, f"{where} inertia", w["inertia"], u.kg * u.m**2, ("body.wheels", "inertia"))
-        speed = (parse_quantity(ctx, f"{where} speed", w["speed"], RATE, dimensionless=False,
-                                bounds=RANGES["body.wheels", "speed"]) if "speed" in w else 0.0)
-        tmax = (_positive(ctx, f"{where} max_torque", w["max_torque"], u.N * u.m, ("body.wheels", "max_torque"))
-                if "max_torque" in w else None)
-        smax = (_positive(ctx, f"{where} max_speed", w["max_speed"], RATE, ("body.wheels", "max_speed"))
-                if "max_speed" in w else None)
-        if smax is not None and abs(speed) > smax:
-            raise ctx.error(f"{where} speed", f"{w['speed']!r} is above max_speed = {w['max_speed']!r}; lower the "
-                                              "speed or raise max_speed")
+        settings = {
+            "axis": parse_plain_vector(ctx, f"{where} axis", w["axis"], 3).tolist(),
+            "inertia": _positive(ctx, f"{where} inertia", w["inertia"], u.kg * u.m**2, ("body.wheels", "inertia")),
+            "speed": (parse_quantity(ctx, f"{where} speed", w["speed"], RATE, dimensionless=False,
+                                     bounds=RANGES["body.wheels", "speed"]) if "speed" in w else 0.0),
+            "max_torque": (_positive(ctx, f"{where} max_torque", w["max_torque"], u.N * u.m,
+                                     ("body.wheels", "max_torque")) if "max_torque" in w else None),
+            "max_speed": (_positive(ctx, f"{where} max_speed", w["max_speed"], RATE, ("body.wheels", "max_speed"))
+                          if "max_speed" in w else None)}
         try:
-            out.append(ReactionWheel(axis, inertia * u.kg * u.m**2, speed * RATE,
-                                     max_torque=None if tmax is None else tmax * u.N * u.m,
-                                     max_speed=None if smax is None else smax * RATE, name=where))
+            reaction_wheel(settings, name=where)
         except InputError as exc:
-            key, _, msg = str(exc).partition(": ")
-            raise ctx.error(f"{where} {key}", msg) from None
+            raise _api_error(ctx, where, exc) from None
+        out.append(settings)
     return out
 
 
+def _checked(ctx, settings, wheels):
+    """``settings`` of a law, checked by its object (:func:`~orbatt.control.control_law`, then
+    its actuator against the ``wheels``' settings), the key named."""
+    try:
+        control_law(settings).check_wheels([reaction_wheel(w) for w in wheels])
+    except InputError as exc:
+        raise _api_error(ctx, "[control]", exc) from None
+    return settings
+
+
+def _pd(ctx, c, data, orbit, wheels):
+    """The PD law's settings (SI floats) of ``[control]`` ``c``; the rules of the law itself
+    are :class:`~orbatt.control.PDControl`'s."""
+    for key in ("kp", "kd"):
+        if key not in c:
+            raise ctx.error(f"[control] {key}", "missing; the PD law needs kp and kd")
+    out = {"law": "pd",
+           "target": parse_choice(ctx, "[control] target", c.get("target", "orbital"), tuple(TARGETS)),
+           "actuator": parse_choice(ctx, "[control] actuator", c.get("actuator", "ideal"), ACTUATORS),
+           "kp": _nonnegative(ctx, "[control] kp", c["kp"], u.N * u.m, ("control", "kp")),
+           "kd": _nonnegative(ctx, "[control] kd", c["kd"], u.N * u.m * u.s, ("control", "kd")),
+           "max_torque": (_positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m,
+                                    ("control", "max_torque")) if "max_torque" in c else None)}
+    for key, n in (("target_q", 4), ("target_axis", 3)):
+        out[key] = parse_plain_vector(ctx, f"[control] {key}", c[key], n).tolist() if key in c else None
+    _checked(ctx, out, wheels)
+    if out["target"] == "sun" and orbit.get("epoch") is None:
+        raise ctx.error("[orbit] epoch", "missing; target = 'sun' needs the date to place the Sun (give [orbit] epoch)")
+    return out, None
+
+
+def _bdot(ctx, c, data, orbit, wheels):
+    """B-dot's settings (SI floats) of ``[control]`` ``c``, and the field it reads
+    (``[environment] magnetic_field``, checked against the epoch: ``"igrf"`` or ``"dipole"``)."""
+    for key in ("gain", "max_dipole"):
+        if key not in c:
+            raise ctx.error(f"[control] {key}", "missing; B-dot needs gain and max_dipole")
+    out = {"law": "bdot",
+           "gain": _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T, ("control", "gain")),
+           "max_dipole": _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2,
+                                   ("control", "max_dipole"))}
+    env = data.get("environment", {})
+    field = env.get("magnetic_field") if isinstance(env, dict) else None
+    if field is None or field == "none":
+        raise ctx.error("[environment] magnetic_field", "missing; B-dot needs a field model: add [environment] "
+                                                        "magnetic_field = 'igrf' or 'dipole'")
+    field = parse_choice(ctx, "[environment] magnetic_field", field, ("igrf", "dipole"))
+    epoch = orbit.get("epoch")
+    if epoch is None:
+        raise ctx.error("[orbit] epoch", f"missing; the {field} field of B-dot needs the date (give [orbit] epoch)")
+    check_field_epoch(ctx, field, epoch)
+    return _checked(ctx, out, wheels), field
+
+
+#: the parser of each control law's ``[control]`` keys, by ``law`` (the laws of
+#: :data:`orbatt.control.LAWS`; a law without one here is refused naming ``[control] law``):
+#: ``parser(ctx, table, data, orbit, wheels) -> (settings, field the law reads or None)``
+LAW_PARSERS = {"pd": _pd, "bdot": _bdot}
+
+
 def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
-    """The control settings of a scenario: a dict of ``wheels`` (list of
-    :class:`~orbatt.control.ReactionWheel`), ``control`` (a :class:`~orbatt.control.PDControl`,
-    :class:`~orbatt.control.BDotControl` or None) and ``magnetic_field`` (``"igrf"``,
-    ``"dipole"`` or None: the field B-dot reads); None when the scenario has neither. Raises
-    :class:`~orbatt.scenario.ScenarioError` naming the key."""
+    """The control settings of a scenario, plain data: a dict of ``wheels`` (each wheel's
+    settings, :meth:`~orbatt.control.ReactionWheel.settings`), ``control`` (the law's settings,
+    :meth:`~orbatt.control.PDControl.settings`, or None) and ``magnetic_field`` (``"igrf"``,
+    ``"dipole"`` or None: the field B-dot reads); None when the scenario has neither. The
+    objects (:func:`~orbatt.control.reaction_wheel`, :func:`~orbatt.control.control_law`)
+    check their rules once; raises :class:`~orbatt.scenario.ScenarioError` naming the key."""
     body = data.get("body", {})
     has_wheels = "wheels" in body
     if "control" not in data and not has_wheels:
@@ -123,71 +186,14 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
         if key not in CONTROL_KEYS:
             raise ctx.error(f"[control] {key}", f"unknown key; allowed: {', '.join(sorted(CONTROL_KEYS))}")
     if "law" not in c:
-        raise ctx.error("[control] law", "missing; give law = 'pd' or 'bdot'")
-    law = parse_choice(ctx, "[control] law", c["law"], LAWS)
-    allowed = PD_KEYS if law == "pd" else BDOT_KEYS
+        raise ctx.error("[control] law", f"missing; give law = {' or '.join(map(repr, LAW_PARSERS))}")
+    law = parse_choice(ctx, "[control] law", c["law"], tuple(LAW_PARSERS))
+    allowed = {"law"} | set(LAWS[law].UNITS)
     for key in c:
         if key not in allowed:
             raise ctx.error(f"[control] {key}", f"not read by law = {law!r}; remove it")
     if potential_kind != "gravity-gradient" or orbit is None:
         raise ctx.error("[control]", f"control needs an orbit: use [potential] kind = 'gravity-gradient' with an "
                                      f"[orbit] (this scenario is {potential_kind!r})")
-    epoch = orbit.get("epoch")
-    if law == "bdot":
-        for key in ("gain", "max_dipole"):
-            if key not in c:
-                raise ctx.error(f"[control] {key}", "missing; B-dot needs gain and max_dipole")
-        gain = _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T, ("control", "gain"))
-        mmax = _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2, ("control", "max_dipole"))
-        env = data.get("environment", {})
-        field = env.get("magnetic_field") if isinstance(env, dict) else None
-        if field is None or field == "none":
-            raise ctx.error("[environment] magnetic_field", "missing; B-dot needs a field model: add [environment] "
-                                                            "magnetic_field = 'igrf' or 'dipole'")
-        field = parse_choice(ctx, "[environment] magnetic_field", field, ("igrf", "dipole"))
-        if epoch is None:
-            raise ctx.error("[orbit] epoch", f"missing; the {field} field of B-dot needs the date (give [orbit] epoch)")
-        check_field_epoch(ctx, field, epoch)
-        out["control"] = BDotControl(gain * u.A * u.m**2 * u.s / u.T, mmax * u.A * u.m**2)
-        out["magnetic_field"] = field
-        return out
-    for key in ("kp", "kd"):
-        if key not in c:
-            raise ctx.error(f"[control] {key}", "missing; the PD law needs kp and kd")
-    target = parse_choice(ctx, "[control] target", c.get("target", "orbital"), ("orbital", "inertial", "sun"))
-    actuator = parse_choice(ctx, "[control] actuator", c.get("actuator", "ideal"), ("ideal", "wheels"))
-    kw = {"kp": _nonnegative(ctx, "[control] kp", c["kp"], u.N * u.m, ("control", "kp")) * u.N * u.m,
-          "kd": _nonnegative(ctx, "[control] kd", c["kd"], u.N * u.m * u.s, ("control", "kd")) * u.N * u.m * u.s,
-          "actuator": actuator}
-    if "max_torque" in c:
-        kw["max_torque"] = _positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m,
-                                     ("control", "max_torque")) * u.N * u.m
-    if target == "inertial" and "target_q" not in c:
-        raise ctx.error("[control] target_q", "missing; target = 'inertial' needs the attitude target_q = [w, x, y, z]")
-    if "target_q" in c:
-        if target == "sun":
-            raise ctx.error("[control] target_q", "only read with target = 'inertial' or 'orbital' (target is 'sun')")
-        kw["target_q"] = parse_plain_vector(ctx, "[control] target_q", c["target_q"], 4)
-    if target == "sun":
-        if "target_axis" not in c:
-            raise ctx.error("[control] target_axis", "missing; target = 'sun' needs the body axis to point at the Sun")
-        kw["target_axis"] = parse_plain_vector(ctx, "[control] target_axis", c["target_axis"], 3)
-        if epoch is None:
-            raise ctx.error("[orbit] epoch", "missing; target = 'sun' needs the date to place the Sun (give [orbit] "
-                                             "epoch)")
-    elif "target_axis" in c:
-        raise ctx.error("[control] target_axis", f"only read with target = 'sun' (target is {target!r})")
-    if actuator == "wheels":
-        if not wheels:
-            raise ctx.error("[control] actuator", "'wheels' needs [[body.wheels]]; add the wheels or use 'ideal'")
-        if not wheel_axes_span(wheels):
-            axes = np.array([w.axis for w in wheels])
-            raise ctx.error("[[body.wheels]] axis", f"the {len(wheels)} wheel axes {axes.tolist()} do not span three "
-                                                    "dimensions, which leaves an axis uncontrollable with actuator = "
-                                                    "'wheels'; add or tilt a wheel")
-    try:
-        out["control"] = PDControl(target, **kw)
-    except InputError as exc:
-        key, _, msg = str(exc).partition(": ")
-        raise ctx.error(f"[control] {key}", msg) from None
+    out["control"], out["magnetic_field"] = LAW_PARSERS[law](ctx, c, data, orbit, wheels)
     return out

@@ -14,6 +14,7 @@ from astropy import units as u
 
 from .. import units as U
 from ..body import RigidBody
+from ..control import reaction_wheel
 from ..environment.frames import one_dates_warning
 from ..errors import ScenarioError
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
@@ -68,7 +69,7 @@ class Scenario:
         self.description = spec.description
         self.text = spec.text
         ctx = FieldContext(str(path) if path else spec.name)
-        wheels = spec.control["wheels"] if spec.control is not None else ()
+        wheels = [reaction_wheel(w) for w in spec.control["wheels"]] if spec.control is not None else ()
         # u.Quantity(x, unit): what x * unit makes, in half the time
         self.body = RigidBody(spec.inertia if spec.dimensionless else u.Quantity(spec.inertia, U.INERTIA), wheels=wheels)
         self.orbit = None

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from astropy import units as u
 
 from .. import units as U
+from ..terms import torque_ranges
 
 __all__ = ["Range", "RANGES", "key_bounds", "range_text", "ANGLE_LIMIT"]
 
@@ -98,8 +99,6 @@ RANGES = {
     ("body.facets", "drag_coefficient"): Range(0.0, 10.0),
     ("body.facets", "specular"): Range(0.0, 1.0),
     ("body.facets", "diffuse"): Range(0.0, 1.0),
-    ("torques", "residual_dipole"): Range(None, 1e5, "A m2", signed=True),
-    ("torques", "constant"): Range(None, 1e4, "N m", signed=True),
     ("environment", "density0"): Range(1e-25, 2.0, "kg / m3"),
     ("environment", "altitude0"): Range(0.0, 1e5, "km"),
     ("environment", "scale_height"): Range(1.0, 1e4, "km"),
@@ -113,6 +112,8 @@ RANGES = {
     ("integration", "t_end"): Range(None, 1e15, "s"),
     ("integration", "output_step"): Range(1e-9, 1e15, "s"),
     ("integration", "step"): Range(1e-9, 1e15, "s"),
+    # the [torques] keys' ranges: from their descriptors (orbatt.terms)
+    **{("torques", key): Range(None, high, unit, signed=True) for key, (high, unit) in torque_ranges().items()},
 }
 
 

@@ -60,6 +60,7 @@ import numpy as np
 
 from .. import units as U
 from ..body import RigidBody
+from ..control import reaction_wheel
 from ..errors import InputError
 from ..epoch import parse_epoch
 from .key_docs import parse_key_docs
@@ -73,6 +74,7 @@ from ..methods import METHODS
 from ..methods.dop853 import INDEPENDENT_VARIABLES
 from ..methods.problem import MAX_ATOL, MAX_RTOL
 from ..orbits import R_EARTH
+from ..terms import torque_key_docs
 
 __all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES",
            "PROVIDERS"]
@@ -147,15 +149,6 @@ position          length, 3 values  required  centre of pressure from the centre
 drag_coefficient  plain             2.2       C_D of the plate (drag)
 specular          plain in [0, 1]   0         specular reflectivity (SRP); absorbed = 1 - specular - diffuse
 diffuse           plain in [0, 1]   0         diffuse reflectivity (SRP)
-
-[torques]
-drag             true | false                      false  aerodynamic drag of the facets (needs [[body.facets]])
-srp              true | false                      false  solar radiation pressure on the facets (needs facets and
-                                                          an epoch: [orbit] epoch or a TLE's)
-residual_dipole  magnetic moment (A m2), 3 values  none   the body's dipole m: torque m x B (body axes)
-constant         torque (N m), 3 values            none   a constant body torque (body axes: thruster
-                                                          misalignment, outgassing); needs no orbit (also with
-                                                          kind = 'torque-free')
 
 [environment]
 atmosphere      'exponential' | 'nrlmsis' | 'none'  'exponential' with drag        density model (NRLMSIS 2.1 through
@@ -232,6 +225,8 @@ independent_variable  text       'auto'                          DOP853's variab
 [sweep]
 # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
 """)
+#: the [torques] keys are described by their terms (orbatt.terms)
+KEY_DOCS["torques"] = torque_key_docs()
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: central body radii (km) below which an apoapsis is refused
 BODY_RADII = {"earth": R_EARTH}
@@ -278,7 +273,7 @@ class Spec:
     integration: dict = field(default_factory=dict)
     sweep: SweepSpec | None = None  # the [sweep] table, if any
     torques: dict | None = None  # [torques], [environment] and the facets (torques_schema.py)
-    control: dict | None = None  # [control] and the wheels (control_schema.py)
+    control: dict | None = None  # [control] and the wheels, plain settings (control_schema.py)
 
 
 def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
@@ -355,7 +350,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     control = parse_control(ctx, data, kind, orbit, dimless, integ["method"])
     if control is not None and control["wheels"]:
         try:  # the gyrostat must keep inertia about every axis
-            RigidBody(inertia * U.INERTIA, wheels=control["wheels"])
+            RigidBody(inertia * U.INERTIA, wheels=[reaction_wheel(w) for w in control["wheels"]])
         except InputError as exc:
             raise ctx.error("[[body.wheels]] inertia", str(exc).split(": ", 1)[-1]) from None
     sweep = None

@@ -17,7 +17,7 @@ def parse_study_keys(ctx, table, spec, *, dimensionless, control=None, wheels=0)
     numbers in normalized units); raise :class:`~orbatt.scenario.ScenarioError` naming
     ``[sweep] key``."""
     outs = set(spec.outputs)
-    law = getattr(control, "law", None)
+    law = None if control is None else control["law"]
     needs = {"max_wheel_speed": (wheels > 0, "reaction wheels ([[body.wheels]])"),
              "wheel_saturated": (wheels > 0, "reaction wheels ([[body.wheels]])"),
              "max_control_torque": (control is not None, "a [control] law"),
@@ -40,7 +40,7 @@ def parse_study_keys(ctx, table, spec, *, dimensionless, control=None, wheels=0)
                                              dimensionless=True)
         if not 0 < spec.settling_angle <= math.pi:
             raise ctx.error("[sweep] settling_angle", f"{table['settling_angle']!r} is outside (0, 180] deg")
-    if "settling_time" in outs and control is not None and getattr(control, "target", None) == "sun":
+    if "settling_time" in outs and control is not None and control.get("target") == "sun":
         raise ctx.error("[sweep] outputs", "'settling_time' of a Sun-pointing law is not available yet; use "
                                            "pointing_axis / pointing_reference without the law, or remove it")
     if "window" in table:

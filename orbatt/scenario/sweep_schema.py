@@ -348,8 +348,9 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     conservative : bool
         Whether the scenario has a conserved energy (no ``[torques]``, no ``[control]``):
         ``final_energy_error`` needs one.
-    control : PDControl or BDotControl or None
-        The scenario's control law (the study outputs that need one).
+    control : dict or None
+        The scenario's control law, its plain settings (:meth:`orbatt.control.PDControl.settings`;
+        the study outputs that need one).
     wheels : int
         The number of reaction wheels.
     data : dict

@@ -39,14 +39,19 @@ import math
 from astropy import units as u
 
 from ..errors import InputError
-from ..torques import Facet
+from ..terms import BY_KEY
+from ..torques import facet
 from .fields import parse_choice, parse_quantity, parse_vector
 from .ranges import RANGES
 
-__all__ = ["FACET_KEYS", "TORQUE_KEYS", "ENVIRONMENT_KEYS", "parse_torques", "check_field_epoch"]
+__all__ = ["FACET_KEYS", "TORQUE_KEYS", "ORBIT_FREE_KEYS", "ENVIRONMENT_KEYS", "parse_torques", "torque_arguments",
+           "check_field_epoch"]
 
 FACET_KEYS = {"area", "normal", "position", "drag_coefficient", "specular", "diffuse"}
-TORQUE_KEYS = {"drag", "srp", "residual_dipole", "constant"}
+#: the [torques] keys: those of the torque terms (:data:`orbatt.terms.TERMS`)
+TORQUE_KEYS = set(BY_KEY)
+#: the [torques] keys of terms that read no orbit (they act with kind = 'torque-free' too)
+ORBIT_FREE_KEYS = {key for key, (term, _) in BY_KEY.items() if not term.kind.orbit}
 ENVIRONMENT_KEYS = {"atmosphere", "density0", "altitude0", "scale_height", "corotation", "f107", "f107a", "ap",
                     "magnetic_field", "shadow"}
 ATMOSPHERES = ("exponential", "nrlmsis", "none")
@@ -101,16 +106,19 @@ def _facets(ctx, raw):
         cd = _number(ctx, f"{where} drag_coefficient", f.get("drag_coefficient", 2.2), "body.facets", "drag_coefficient")
         cs = _number(ctx, f"{where} specular", f.get("specular", 0.0), "body.facets", "specular")
         cdf = _number(ctx, f"{where} diffuse", f.get("diffuse", 0.0), "body.facets", "diffuse")
+        settings = {"area": area, "normal": normal.tolist(), "position": pos.tolist(), "drag_coefficient": cd,
+                    "specular": cs, "diffuse": cdf}
         try:
-            out.append(Facet(area * u.m**2, normal, pos * u.m, cd, cs, cdf, name=where))
+            facet(settings, name=where)  # the plate's own rules
         except InputError as exc:
             raise ctx.error(where, str(exc).split(": ", 1)[-1]) from None
+        out.append(settings)
     return out
 
 
 def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
-    """The torque settings of a scenario (``None`` without ``[torques]``): a dict of
-    ``facets`` (list of :class:`~orbatt.torques.Facet`), ``drag``, ``srp``, ``residual_dipole``
+    """The torque settings of a scenario, plain data (``None`` without ``[torques]``): a dict of
+    ``facets`` (each plate's settings, :meth:`~orbatt.torques.Facet.settings`), ``drag``, ``srp``, ``residual_dipole``
     (A m^2 or None), ``constant`` (N m or None) and ``environment`` (the models' settings, SI floats); raises
     :class:`~orbatt.scenario.ScenarioError` naming the key. ``bdot``: a B-dot law reads
     ``[environment] magnetic_field`` (:mod:`orbatt.scenario.control_schema`)."""
@@ -135,23 +143,17 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     for key in env:
         if key not in ENVIRONMENT_KEYS:
             raise ctx.error(f"[environment] {key}", f"unknown key; allowed: {', '.join(sorted(ENVIRONMENT_KEYS))}")
-    orbit_free = set(tq) <= {"constant"} and not env and not facets and not bdot
+    orbit_free = set(tq) <= ORBIT_FREE_KEYS and not env and not facets and not bdot
+    free = ", ".join(repr(k) for k in sorted(ORBIT_FREE_KEYS))
     if orbit_free and potential_kind not in ("gravity-gradient", "torque-free"):
-        raise ctx.error("[torques] constant", f"acts with [potential] kind = 'torque-free' or 'gravity-gradient' (this "
-                                              f"scenario is {potential_kind!r})")
+        raise ctx.error(f"[torques] {sorted(tq)[0]}" if tq else "[torques]",
+                        f"acts with [potential] kind = 'torque-free' or 'gravity-gradient' (this scenario is "
+                        f"{potential_kind!r})")
     if not orbit_free and (potential_kind != "gravity-gradient" or orbit is None):
         raise ctx.error("[torques]", f"the torques need an orbit: use [potential] kind = 'gravity-gradient' with an "
-                                     f"[orbit] (this scenario is {potential_kind!r}); only 'constant' needs none")
-    constant = None
-    if "constant" in tq:
-        constant = parse_vector(ctx, "[torques] constant", tq["constant"], 3, u.N * u.m, dimensionless=False,
-                                bounds=RANGES["torques", "constant"])
-    drag = _bool(ctx, "[torques] drag", tq.get("drag", False))
-    srp = _bool(ctx, "[torques] srp", tq.get("srp", False))
-    dipole = None
-    if "residual_dipole" in tq:
-        dipole = parse_vector(ctx, "[torques] residual_dipole", tq["residual_dipole"], 3, u.A * u.m**2,
-                              dimensionless=False, bounds=RANGES["torques", "residual_dipole"])
+                                     f"[orbit] (this scenario is {potential_kind!r}); only {free} needs none")
+    values = {key: _term_key(ctx, key, spec, tq) for key, (_, spec) in BY_KEY.items()}
+    drag, srp, dipole = values["drag"], values["srp"], values["residual_dipole"]
     for name, on in (("drag", drag), ("srp", srp)):
         if on and not facets:
             raise ctx.error(f"[torques] {name}", "needs the body's flat plates: add [[body.facets]] tables")
@@ -206,5 +208,26 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
     if srp and epoch is None:
         raise ctx.error("[orbit] epoch", "missing; SRP needs the date to place the Sun (give [orbit] epoch)")
     out_env["magnetic_field"] = field
-    return {"facets": facets, "drag": drag, "srp": srp, "residual_dipole": dipole, "constant": constant,
-            "environment": out_env}
+    return {"facets": facets, **values, "environment": out_env}
+
+
+def _term_key(ctx, key, spec, tq):
+    """The value of ``[torques] key`` (its :class:`~orbatt.terms.TomlKey` ``spec``): a flag
+    (default false), or 3 quantities in the key's unit (SI floats; None when absent)."""
+    where = f"[torques] {key}"
+    if spec.kind == "flag":
+        return _bool(ctx, where, tq.get(key, False))
+    if key not in tq:
+        return None
+    return parse_vector(ctx, where, tq[key], 3, u.Unit(spec.unit), dimensionless=False, bounds=RANGES["torques", key])
+
+
+def torque_arguments(torques):
+    """The :class:`~orbatt.EnvironmentTorques` keywords of the term keys of a parsed
+    ``[torques]`` (:func:`parse_torques`): flags as they are, vectors as Quantities (None when
+    absent)."""
+    out = {}
+    for key, (_, spec) in BY_KEY.items():
+        v = torques.get(key)
+        out[spec.argument] = v * u.Unit(spec.unit) if spec.kind == "vector" and v is not None else v
+    return out

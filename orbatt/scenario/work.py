@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from astropy import units as u
 
 from ..environment.atmosphere import PiecewiseExponentialAtmosphere
 from ..environment.sun import SRP_FLUX
@@ -85,9 +84,9 @@ def _facet_torques(spec, peri):
         v = (v_p + _OMEGA_EARTH * r_p) * 1e3
         q_drag = 0.5 * _density_bound(tq["environment"], r_p - R_EARTH) * v * v
     for k, f in enumerate(tq["facets"]):
-        area = float(u.Quantity(f.area, u.m**2).to_value(u.m**2))
-        arm = float(np.linalg.norm(u.Quantity(f.position, u.m).to_value(u.m)))
-        pressure = q_drag * f.drag_coefficient + (2.0 * _P_SUN if tq["srp"] else 0.0)
+        area = f["area"]  # m2
+        arm = float(np.linalg.norm(f["position"]))  # m
+        pressure = q_drag * f["drag_coefficient"] + (2.0 * _P_SUN if tq["srp"] else 0.0)
         out.append((pressure * area * arm, f"[[body.facets]] {k + 1} area"))
     return out
 
@@ -124,15 +123,17 @@ def torque_rates(spec):
     c = spec.control
     if c is not None:
         law = c["control"]
-        if law is not None and hasattr(law, "kd"):
-            rates.append((math.sqrt(law.kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {law.kp:.3g} N m)"))
-            rates.append((law.kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {law.kd:.3g} N m s)"))
+        if law is not None and law["law"] == "pd":
+            kp, kd = law["kp"], law["kd"]
+            rates.append((math.sqrt(kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {kp:.3g} N m)"))
+            rates.append((kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {kd:.3g} N m s)"))
         elif law is not None:
-            rates.append((law.gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {law.gain:.3g} "
-                                                                         "A m2 s / T)"))
+            gain = law["gain"]
+            rates.append((gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {gain:.3g} "
+                                                                     "A m2 s / T)"))
         for k, w in enumerate(c["wheels"]):
-            speed = max(abs(w.speed_rad_s), w.max_speed_rad_s or 0.0)
-            h = w.inertia_kg_m2 * speed
+            speed = max(abs(w["speed"]), w["max_speed"] or 0.0)
+            h = w["inertia"] * speed
             if h > 0:
                 rates.append((h / inertia, f"[[body.wheels]] {k + 1} speed",
                               f"the nutation of wheel momentum {h:.3g} N m s"))

@@ -7,6 +7,7 @@ import pytest
 
 from orbatt.core import hamiltonian as H
 from orbatt.core import kepler
+from orbatt.core import evaluation as kev
 from orbatt.core import model as km
 from orbatt.core import potentials as kp
 
@@ -57,7 +58,7 @@ def test_a_model_of_one_term_is_that_term_exactly():
         r, xhat = kepler.kepler_radial(t, ORB, kp.new_work())
         for yi in y:
             q = tuple(yi[:4])
-            U, G = km.evaluate_many(np.array([t]), yi[None, :4].copy(), I_SAT, terms, params, table,
+            U, G = kev.evaluate_many(np.array([t]), yi[None, :4].copy(), I_SAT, terms, params, table,
                                     kp.new_work())[:2]
             U0, G0 = kp.gravity_gradient(q, tuple(I_SAT), GM / (r * r * r), xhat)
             assert U[0] == U0
@@ -75,10 +76,10 @@ def test_terms_add_up():
     y = _states(30, 1)
     t = np.full(30, 777.0)
     q = np.ascontiguousarray(y[:, :4])
-    Ug, Gg, tg = km.evaluate_many(t, q, I_SAT, *gg, kp.new_work())
-    Uh, Gh, th = km.evaluate_many(t, q, I_SAT, *ht, kp.new_work())
-    Ub, Gb, tb = km.evaluate_many(t, q, I_SAT, *both, kp.new_work())
-    U2, G2, _ = km.evaluate_many(t, q, I_SAT, *twice, kp.new_work())
+    Ug, Gg, tg = kev.evaluate_many(t, q, I_SAT, *gg, kp.new_work())
+    Uh, Gh, th = kev.evaluate_many(t, q, I_SAT, *ht, kp.new_work())
+    Ub, Gb, tb = kev.evaluate_many(t, q, I_SAT, *both, kp.new_work())
+    U2, G2, _ = kev.evaluate_many(t, q, I_SAT, *twice, kp.new_work())
     np.testing.assert_array_equal(Ub, Ug + Uh)
     np.testing.assert_array_equal(Gb, Gg + Gh)
     np.testing.assert_allclose(tb, tg + th, rtol=1e-13, atol=1e-20)

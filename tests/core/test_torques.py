@@ -8,6 +8,7 @@ import pytest
 from orbatt import quaternion as qt
 from orbatt.core import hamiltonian as H
 from orbatt.core import kepler
+from orbatt.core import evaluation as kev
 from orbatt.core import model as km
 from orbatt.core import potentials as kp
 from orbatt.core import torques as trq
@@ -104,7 +105,7 @@ def test_drag_term_of_the_model():
     assert model[0][0, km.FLAGS] & km.NEEDS_VELOCITY and model[0][1, km.FLAGS] == km.FIRST_TABLE_SLOT
     t = np.array([0.0, 100.0, 2500.0])
     q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
-    U, tau = km.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
+    U, tau = kev.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
     assert np.all(U == 0.0)
     _, _, r, pos, vel = kepler.kepler_many(t, ORB, GM)
     for i in range(t.size):
@@ -113,6 +114,31 @@ def test_drag_term_of_the_model():
         k = 0.5 * rho * vrel @ vrel
         ref = _drag_reference(q[i], k, vrel / np.linalg.norm(vrel), F)
         np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-9)
+
+
+def test_drag_term_with_the_exponential_atmosphere_in_closed_form():
+    """Issue 25: the exponential density evaluated in the kernel at the orbit's radius (no table,
+    no table knots to land on): the torque of the flat-plate formulas to round-off at any time,
+    where the 30 s spline of the same density is off by ~1e-9 between its knots."""
+    F = _facets()
+    closed = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
+                      terms=[(km.DRAG, km.drag_params(F, WE, (RHO0, H0, HS, REQ)), None)])
+    assert closed[2].shape[0] == 0 and closed[0][1, km.R1] == closed[0][1, km.R0]
+    assert closed[1][closed[0][1, km.P0] + 2] == km.DENSITY_EXPONENTIAL
+    assert km.next_breakpoint(10.0, *closed) == np.inf         # no knots
+    t = np.array([0.0, 15.0, 1234.5, 2500.0])
+    q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
+    _, tau = kev.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *closed, kp.new_work())
+    _, tau_table = kev.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *_drag_model(F), kp.new_work())
+    _, _, r, pos, vel = kepler.kepler_many(t, ORB, GM)
+    for i in range(t.size):
+        vrel = vel[i] - np.cross([0, 0, WE], pos[i])
+        k = 0.5 * RHO0 * np.exp(-((r[i] - REQ) - H0) / HS) * (vrel @ vrel)
+        ref = _drag_reference(q[i], k, vrel / np.linalg.norm(vrel), F)
+        np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-13, atol=1e-13 * np.linalg.norm(ref))
+        np.testing.assert_allclose(tau_table[i, 0], ref, rtol=1e-8)
+    with pytest.raises(ValueError, match="needs a spline table"):     # a tabulated density needs its table
+        km.build(orbit=(km.ORBIT_KEPLER, ORB, None), terms=[(km.DRAG, km.drag_params(F, WE), None)])
 
 
 def test_srp_and_magnetic_terms_of_the_model():
@@ -130,7 +156,7 @@ def test_srp_and_magnetic_terms_of_the_model():
     assert list(model[0][1:, km.FLAGS]) == [km.FIRST_TABLE_SLOT, km.FIRST_TABLE_SLOT + 1]
     t = np.array([0.0, 1000.0, 2000.0, 3000.0])
     q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
-    _, tau = km.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
+    _, tau = kev.evaluate_terms(t, q, np.array([1.0, 2.0, 3.0]), *model, kp.new_work())
     _, _, _, pos, _ = kepler.kepler_many(t, ORB, GM)
     lit = 0
     for i, ti in enumerate(t):

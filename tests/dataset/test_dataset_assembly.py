@@ -68,8 +68,8 @@ def test_a_run_imports_no_dask():
 def test_variables_made_without_xarrays_constructor_are_its_variables(orbit_ds, monkeypatch, direct):
     """The direct variables and index-variable copies (checked at import) give the Dataset of
     the public constructor, and so does the fallback through xarray's constructors."""
-    assert assembly._DIRECT  # this xarray passes the import check
-    monkeypatch.setattr(assembly, "_DIRECT", direct)
+    assert assembly.DIRECT  # this xarray passes the import check
+    monkeypatch.setattr(assembly, "DIRECT", direct)
     for _ in range(2):  # the second time from the cached indexes (time included: 2 outputs)
         ds = assembly.assemble(*_parts(orbit_ds))
         assert ds.identical(assembly.assemble(*_parts(orbit_ds), direct=False))

@@ -67,6 +67,68 @@ def test_spline_eval_many_matches_scipy():
                                rtol=0, atol=1e-14)
 
 
+def _scipy_table(t, v):
+    """The table of scipy's not-a-knot CubicSpline (what spline_table computed before)."""
+    from scipy.interpolate import CubicSpline
+
+    c = CubicSpline(t, v, bc_type="not-a-knot").c       # (4, n - 1, ncomp), highest power first
+    table = np.zeros((t.shape[0], 1 + 4 * v.shape[1]))
+    table[:, 0] = t
+    for k in range(v.shape[1]):
+        table[:-1, 1 + 4 * k:5 + 4 * k] = c[::-1, :, k].T
+        table[-1, 1 + 4 * k] = v[-1, k]
+    return table
+
+
+def _field_like(t, rng):
+    """Three components of very different scales: a field in nT-like numbers, a density-like
+    decaying exponential, and noise (a spline far from its data's smoothness)."""
+    return np.stack([3e4 * np.sin(t / 900.0) + 1e4 * np.cos(t / 5000.0), 1e-12 * np.exp(-t / 1e5),
+                     rng.normal(size=t.shape[0])], axis=1)
+
+
+@pytest.mark.parametrize("n", [4, 5, 7, 100, 4321])
+def test_spline_table_on_even_steps_is_scipys_bit_for_bit(n):
+    """The environment tables are sampled at even steps: there the compiled solver gives
+    scipy's CubicSpline coefficients exactly (LAPACK's banded solver pivots on no row)."""
+    rng = np.random.default_rng(n)
+    t = np.linspace(0.0, 86400.0, n)
+    v = _field_like(t, rng)
+    np.testing.assert_array_equal(tables.spline_table(t, v), _scipy_table(t, v))
+
+
+@pytest.mark.parametrize("n", [5, 100, 4321])
+def test_spline_table_on_uneven_steps_agrees_with_scipy(n):
+    """On uneven steps the two eliminations differ (scipy's pivots): the knot values and slopes
+    agree to 1e-15 of each component's scale, the spline's values between the knots to 1e-15
+    (the cubic and quadratic coefficients are differences of nearly equal slopes over the
+    step: their last digits are ill-conditioned in both)."""
+    rng = np.random.default_rng(n)
+    t = np.cumsum(rng.uniform(0.2, 3.0, n))
+    v = _field_like(t, rng)
+    ours, ref = tables.spline_table(t, v), _scipy_table(t, v)
+    for k in range(3):
+        cols = slice(1 + 4 * k, 3 + 4 * k)      # c0 (values), c1 (slopes)
+        np.testing.assert_allclose(ours[:, cols], ref[:, cols], rtol=0, atol=2e-15 * np.max(np.abs(ref[:, cols])))
+    x = np.sort(rng.uniform(t[0], t[-1], 2000))
+    got, want = ke.spline_eval_many(ours, x, 3), ke.spline_eval_many(ref, x, 3)
+    for k in range(3):
+        scale = np.max(np.abs(v[:, k]))
+        np.testing.assert_allclose(got[:, k], want[:, k], rtol=0, atol=4e-15 * scale)
+
+
+def test_spline_table_imports_no_scipy():
+    """A spline table needs no scipy (issue 25: scipy.interpolate cost ~0.6-1.3 s of every run)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np; from orbatt.environment.tables import spline_table; "
+            "spline_table(np.arange(6.0), np.arange(6.0) ** 3); "
+            "print(sorted(m for m in sys.modules if m.startswith(('scipy.interpolate', 'scipy.linalg'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"      # (numba itself imports scipy's top level, ~15 ms)
+
+
 def test_sample_along_orbit():
     s = tables.sample_along_orbit(ORBIT, 100.0, 1000.0, 7 * u.s)
     assert s.t[0] == 100.0 and s.t[-1] == 1000.0 and np.all(np.diff(s.t) <= 7.0 + 1e-12)

@@ -78,6 +78,52 @@ def test_erfa_rotation_is_astropys_transform():
                                atol=1e-15)
 
 
+def test_geodetic_is_astropys_to_geodetic_bit_for_bit():
+    """frames.geodetic calls ERFA directly (no astropy.coordinates import, issue 25) with the
+    operations of EarthLocation.to_geodetic("WGS84") and Longitude.wrap_at(180 deg)."""
+    rng = np.random.default_rng(5)
+    r = rng.normal(size=(3000, 3))
+    r *= rng.uniform(6300.0, 42000.0, (3000, 1)) / np.linalg.norm(r, axis=1)[:, None]
+    r[:4, 1] = 0.0                  # on the 0 / 180 deg meridians
+    r[:2, 0] = -7000.0
+    t = Time("2025-03-20T00:00:00", scale="utc") + np.linspace(0.0, 86400.0, 3000) * u.s
+    lat, lon, alt = frames.geodetic(t, r)
+    x = frames.gcrs_to_itrs(t, r)
+    loc = EarthLocation.from_geocentric(x[:, 0], x[:, 1], x[:, 2], unit=u.km)
+    lon_ref, lat_ref, h_ref = loc.to_geodetic("WGS84")
+    np.testing.assert_array_equal(lat, lat_ref.to_value(u.deg))
+    np.testing.assert_array_equal(lon, lon_ref.wrap_at(180 * u.deg).to_value(u.deg))
+    np.testing.assert_array_equal(alt, h_ref.to_value(u.km))
+    assert np.all((lon >= -180.0) & (lon < 180.0))
+
+
+@pytest.mark.parametrize("span_days, n", [(1.0, 4321), (30.0, 20000), (0.01, 200)])
+def test_interpolated_precession_nutation_is_erfas(span_days, n):
+    """Many instants: the bias-precession-nutation matrix from nodes every 10 minutes agrees
+    with ERFA's c2i06a at each instant to round-off, and the whole rotation with c2t06a
+    (issue 25: c2i06a was ~0.2 s of each day-long environment table)."""
+    import astropy.units as u
+    import erfa
+    from astropy.time import Time
+
+    from orbatt.environment import frames
+
+    t = Time("2025-03-20T00:00:00", scale="utc") + np.linspace(0.0, span_days * 86400.0, n) * u.s
+    tt = t.tt
+    c2i = frames.celestial_to_intermediate(tt.jd1, tt.jd2)
+    assert np.abs(c2i - erfa.c2i06a(tt.jd1, tt.jd2)).max() <= 1e-15
+    R = frames.rotation_gcrs_to_itrs(t)
+    with frames.offline_iers():
+        from astropy.utils import iers
+
+        xp, yp = iers.earth_orientation_table.get().pm_xy(t)
+    ut1 = t.ut1
+    direct = erfa.c2t06a(tt.jd1, tt.jd2, ut1.jd1, ut1.jd2, xp.to_value(u.rad), yp.to_value(u.rad))
+    assert np.abs(R - direct).max() <= 1e-15
+    few = t[:50]    # few instants: c2i06a at each, c2t06a's bits
+    np.testing.assert_array_equal(frames.rotation_gcrs_to_itrs(few), direct[:50])
+
+
 EOP_CHILD = """
 import sys, numpy as np, astropy.units as u
 from astropy.time import Time

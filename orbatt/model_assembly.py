@@ -1,0 +1,97 @@
+"""The one assembler of the kernel model (``docs/design.md`` §8): every run of
+:func:`orbatt.propagate` - the single run, the ensemble, each orbit group of a sweep - and the
+Dataset's control variables get their model ``(terms, params, table)``
+(:mod:`orbatt.core.model`) from :func:`assemble`.
+
+Each part gives its own rows: the potential its orbit row and term rows (its
+:meth:`~orbatt.potentials.Potential.kernel_model`, built once: the orbit provider's row and,
+for :class:`~orbatt.EnvironmentTorques`, the terms of :mod:`orbatt.terms`; unpacked by
+:func:`model_rows`), the body's reaction wheels their extended state
+(:func:`orbatt.control.wheels_row`), the control law its row (``model_row`` of
+:class:`~orbatt.PDControl`, :class:`~orbatt.BDotControl`, reading the fields the potential
+sampled along the orbit, :meth:`~orbatt.EnvironmentTorques.field_table`);
+:func:`orbatt.core.model.build` packs them once, in that order.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .control import wheels_row
+from .core import model as km
+from .errors import InputError
+
+__all__ = ["KernelSpec", "assemble", "model_rows"]
+
+
+class KernelSpec(NamedTuple):
+    """The model as the compiled kernels take it (the term list of :mod:`orbatt.core.model`),
+    always passed to them together and in this order (``*spec``)."""
+
+    terms: np.ndarray
+    params: np.ndarray
+    table: np.ndarray
+
+
+def model_rows(model):
+    """``(orbit row, term rows)`` of a built model ``(terms, params, table)``: the rows
+    ``(kind, params, table or None)`` :func:`orbatt.core.model.build` packs into it again."""
+    terms, params, table = model
+
+    def row(j):
+        t = table[terms[j, km.R0]:terms[j, km.R1]] if terms[j, km.R1] > terms[j, km.R0] else None
+        return (int(terms[j, km.KIND]), params[terms[j, km.P0]:terms[j, km.P1]], t)
+
+    return row(0), [row(j) for j in range(1, terms.shape[0])]
+
+
+def _potential_model(potential):
+    """The potential's own model: its ``kernel_model()`` (:class:`orbatt.potentials.Potential`,
+    built once, fresh copies), or that of its kernel specification ``kind``, ``params``,
+    ``table`` (:func:`orbatt.core.model.from_spec`)."""
+    table = np.asarray(potential.table, dtype=np.float64)
+    if table.ndim != 2:
+        raise InputError(f"potential.table: expected a 2-D array, got shape {table.shape}")
+    if hasattr(potential, "kernel_model"):
+        return potential.kernel_model()
+    try:  # from_spec copies params and table into fresh arrays
+        return km.from_spec(int(potential.kind), potential.params, table)
+    except ValueError as exc:
+        raise InputError(f"potential: {exc}") from None
+
+
+def assemble(potential, bodies) -> KernelSpec:
+    """The :class:`KernelSpec` of a run: ``potential``'s orbit and terms, then the wheels of
+    ``bodies`` (the members share them) and the control law the potential carries
+    (``potential.control``), after the potential's ``check_body`` (if any) accepted every body.
+
+    Parameters
+    ----------
+    potential : Potential or object with ``kind``, ``params``, ``table``
+        An orbatt potential (:mod:`orbatt.potentials`, :class:`orbatt.EnvironmentTorques`).
+    bodies : list of RigidBody
+        The members (:func:`orbatt.methods.problem.bodies_of`).
+
+    Returns
+    -------
+    KernelSpec
+        Writeable C-contiguous arrays (one numba specialization of every kernel), internal
+        units.
+    """
+    if not all(hasattr(potential, a) for a in ("kind", "params", "table")):
+        raise InputError(f"potential: expected an orbatt Potential (with kind, params, table), got "
+                         f"{type(potential).__name__}")
+    if hasattr(potential, "check_body"):
+        for b in set(bodies):
+            potential.check_body(b)
+    wheels = bodies[0].wheels
+    control = getattr(potential, "control", None)
+    if not wheels and control is None:
+        return KernelSpec(*_potential_model(potential))
+    orbit_row, rows = model_rows(_potential_model(potential))
+    if wheels:
+        rows.append(wheels_row(wheels))
+    if control is not None:
+        rows.append(control.model_row(wheels, potential.field_table))
+    return KernelSpec(*km.build(orbit=orbit_row, terms=rows))
