@@ -10,8 +10,9 @@ Modules: :mod:`._jit` (numba presets, intrinsics, status codes, flag names),
 generalized force map), :mod:`.environment` (densities, shadow, spline tables),
 :mod:`.control` and :mod:`.gyrostat` (control laws, reaction wheels), :mod:`.model` (the term
 list and the one dispatch on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+
-:mod:`.dop853_coefficients`, :mod:`.verner98_coefficients`, :mod:`.butcher`,
-:mod:`.dop853_lanes`) and :mod:`.splitting` (step loops), :mod:`.free_body` and
+:mod:`.rk_loop`, the one adaptive step loop, :mod:`.step_control`, its building blocks,
+:mod:`.dop853_coefficients`, :mod:`.verner98_coefficients`, :mod:`.butcher`) and
+:mod:`.splitting` (step loops), :mod:`.free_body` and
 :mod:`.carlson` (the exact torque-free body); :mod:`.mutual` and :mod:`.mutual_splitting` (a
 binary asteroid: the orbit and both attitudes together, ``docs/design.md`` §12).
 

@@ -109,11 +109,11 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
     return ext, app, m
 
 
-@jit
-def rhs_extended(s, y, inertia, terms, params, table, work, dy):
+@jit_inline
+def extended_rates(t, dtds, r, xhat, v, y, inertia, terms, params, table, work, dy):
     """``dy/ds`` of the gyrostat with control (module docstring) into ``dy`` (``len(y)``
-    components: 8 plus one per wheel); ``s`` the time, or the eccentric anomaly
-    (``dy/ds = dt/ds dy/dt``, :func:`orbatt.core.hamiltonian.rhs`)."""
+    components: 8 plus one per wheel) for the orbit's ``t, dt/ds, r, xhat, v``
+    (:func:`orbatt.core.model.orbit_at`, evaluated once for a group of lanes)."""
     q = (y[0], y[1], y[2], y[3])
     Q = (y[4], y[5], y[6], y[7])
     w0 = wheel_row(terms)
@@ -122,8 +122,6 @@ def rhs_extended(s, y, inertia, terms, params, table, work, dy):
     a = (2.0 * omega[0], 2.0 * omega[1], 2.0 * omega[2])  # the pure quaternion (0, 2 omega)
     qd = qmul_pure(q, a)
     Qd = qmul_pure(Q, a)
-    # the orbit once for the terms and the control law (an extended model has >= 1 term)
-    t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
     _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
     ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:], r, xhat, v)
     Gc = gradient_of_torque(q, ext)
@@ -132,6 +130,26 @@ def rhs_extended(s, y, inertia, terms, params, table, work, dy):
         dy[4 + k] = dtds * (0.25 * Qd[k] - G[k] - Gc[k])
     for k in range(8, y.shape[0]):  # the wheels' rates (control_torques wrote dh/dt)
         dy[k] *= dtds
+
+
+@jit
+def rhs_extended(s, y, inertia, terms, params, table, work, dy):
+    """``dy/ds`` of the gyrostat with control (module docstring) into ``dy`` (``len(y)``
+    components: 8 plus one per wheel); ``s`` the time, or the eccentric anomaly
+    (``dy/ds = dt/ds dy/dt``, :func:`orbatt.core.hamiltonian.rhs`)."""
+    # the orbit once for the terms and the control law (an extended model has >= 1 term)
+    t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
+    extended_rates(t, dtds, r, xhat, v, y, inertia, terms, params, table, work, dy)
+
+
+@jit
+def rhs_extended_lanes(s, Y, nl, I, terms, params, table, work, dY):
+    """:func:`rhs_extended` for lanes ``0..nl-1`` of ``Y (n, L)`` (inertia ``I (3, L)``) at the
+    common ``s``, into ``dY (n, L)``: the orbit evaluated once for the group, then each lane's
+    operations of :func:`rhs_extended`, exactly (a lane's column is its state)."""
+    t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
+    for l in range(nl):
+        extended_rates(t, dtds, r, xhat, v, Y[:, l], I[:, l], terms, params, table, work, dY[:, l])
 
 
 @jit

@@ -227,7 +227,7 @@ def rhs_coupled(t, y, c, terms, params, table, work, dy):
 
 @jit_inline
 def hinit_norms_vec(y, f, atol, c, rtol):
-    """:func:`orbatt.core.dop853.hinit_norms` with the absolute tolerance ``atol * c[C_ATOL + i]``
+    """:func:`orbatt.core.step_control.hinit_norms` with the absolute tolerance ``atol * c[C_ATOL + i]``
     of each component (:func:`constants`)."""
     dnf = 0.0
     dny = 0.0
@@ -242,7 +242,7 @@ def hinit_norms_vec(y, f, atol, c, rtol):
 
 @jit_inline
 def hinit_der2_vec(y, f0, f1, atol, c, rtol):
-    """:func:`orbatt.core.dop853.hinit_der2` with the absolute tolerances of :func:`hinit_norms_vec`."""
+    """:func:`orbatt.core.step_control.hinit_der2` with the absolute tolerances of :func:`hinit_norms_vec`."""
     der2 = 0.0
     for i in range(y.shape[0]):
         d = (f1[i] - f0[i]) / (atol * c[C_ATOL + i] + rtol * abs(y[i]))

@@ -25,7 +25,10 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
     size (controlled by the group's largest error) and the orbit evaluation, with the
     per-member arithmetic vectorized. 5-10x the throughput of ``"dop853"`` on ensembles;
     each member is at least as accurate as alone, but results are not bitwise those of
-    one-by-one runs.
+    one-by-one runs. Rigid bodies and extended models (wheels, control laws): the same compiled
+    step loop as ``"dop853"`` (:mod:`orbatt.core.rk_loop`), instantiated for a group of lanes.
+``"vern98-lanes"`` (:mod:`.dop853`)
+    ``"dop853-lanes"`` with Verner's 9(8) pair.
 ``"splitting2"``, ``"splitting4"``, ``"splitting6"`` (and named variants; :mod:`.fixed_step`)
     Symplectic splitting (:mod:`orbatt.core.splitting`), fixed ``step``: Strang (order 2),
     McLachlan's 5-stage composition (order 4; ``"splitting4-yoshida"``,
@@ -52,11 +55,11 @@ Writing a method: see :class:`Method` (the subclass contract) and :func:`registe
 from __future__ import annotations
 
 from .base import METHODS, Method, methods, register, resolve_method
-from .dop853 import DOP853, DOP853Lanes, Vern98
+from .dop853 import DOP853, DOP853Lanes, Vern98, Vern98Lanes
 from .exact import Exact
 from .fixed_step import RK4, FixedStep, Splitting
 from .problem import KernelSpec, Problem
 from .scipy_ivp import Scipy
 
 __all__ = ["Method", "METHODS", "methods", "register", "resolve_method", "Problem", "KernelSpec", "DOP853",
-           "DOP853Lanes", "Vern98", "Exact", "FixedStep", "RK4", "Splitting", "Scipy"]
+           "DOP853Lanes", "Vern98", "Vern98Lanes", "Exact", "FixedStep", "RK4", "Splitting", "Scipy"]

@@ -1,6 +1,7 @@
-"""Drivers of the compiled DOP853 kernels (:mod:`orbatt.core.dop853`): ``"dop853"`` (one
-member, or an ensemble stepped member by member in parallel) and ``"dop853-lanes"`` (an
-ensemble in lockstep groups)."""
+"""Drivers of the compiled DOP853 and Verner 9(8) kernels (:mod:`orbatt.core.dop853`, the one
+step loop of :mod:`orbatt.core.rk_loop`): ``"dop853"``, ``"vern98"`` (one member, or an ensemble
+stepped member by member in parallel) and ``"dop853-lanes"``, ``"vern98-lanes"`` (an ensemble in
+lockstep groups)."""
 from __future__ import annotations
 
 import math
@@ -8,7 +9,6 @@ import math
 import numpy as np
 
 from ..core import dop853 as kd
-from ..core import dop853_lanes as kdl
 from ..core import kepler as kk
 from ..core import model as km
 from ..core import potentials as kp
@@ -16,7 +16,7 @@ from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
 from .problem import KernelSpec
 
-__all__ = ["DOP853", "DOP853Lanes", "Vern98"]
+__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes"]
 
 #: counters summed into the statistics
 _COUNTS = {"steps": kd.CNT_STEPS, "rejected_steps": kd.CNT_REJECTED, "rhs_evaluations": kd.CNT_NFEV}
@@ -160,18 +160,23 @@ class DOP853(Method):
         Y[:, self.n0:] = self.out[:, :n]
         return p.t_out[:self.n0 + n], Y
 
-    def outputs(self):
+    def _step_end_outputs(self, counters, rec_y):
+        """``(t, Y)`` of a run that recorded every step end (one member): the times
+        ``self.rec_t`` and states ``rec_y (cap, n)`` of the first ``counters[0, CNT_NREC]``."""
         p = self.p
-        if p.step_ends:
-            n = int(self.CNT[0, kd.CNT_NREC])
-            rec = self.rec_t[:n]
-            if self.anomaly is not None:  # the step ends' times; the last lands on t_end itself
-                rec = self.anomaly.times(rec)
-                if n and self.CNT[0, kd.CNT_IOUT] >= self.t_k.shape[0]:
-                    rec[-1] = p.t_out[-1]
-            t = np.concatenate([[p.t0], rec])
-            Y = np.concatenate([p.y0[:1, None, :], self.rec_y[None, :n]], axis=1)
-            return t, Y
+        n = int(counters[0, kd.CNT_NREC])
+        rec = self.rec_t[:n]
+        if self.anomaly is not None:  # the step ends' times; the last lands on t_end itself
+            rec = self.anomaly.times(rec)
+            if n and counters[0, kd.CNT_IOUT] >= self.t_k.shape[0]:
+                rec[-1] = p.t_out[-1]
+        t = np.concatenate([[p.t0], rec])
+        Y = np.concatenate([p.y0[:1, None, :], rec_y[None, :n]], axis=1)
+        return t, Y
+
+    def outputs(self):
+        if self.p.step_ends:
+            return self._step_end_outputs(self.CNT, self.rec_y)
         return self._grid_outputs(self.CNT)
 
     def stats(self):
@@ -196,41 +201,59 @@ class Vern98(DOP853):
 
 @register
 class DOP853Lanes(DOP853):
-    """DOP853 over an ensemble in lockstep groups (:func:`orbatt.core.dop853.advance_lanes`)."""
+    """DOP853 over an ensemble in lockstep groups (:data:`orbatt.core.dop853.advance_lanes`: the
+    one step loop with a group of lanes); the rigid body and extended models (wheels, control
+    laws)."""
 
     name = "dop853-lanes"
-    extended = False
     options = {"max_step": DOP853.options["max_step"],
                "independent_variable": DOP853.options["independent_variable"],
                "lanes": "members per lockstep group (default 32)"}
     description = ("compiled DOP853 for ensembles: groups of members share the step size and the orbit "
                    "evaluation, vectorized over members (results agree with one-by-one runs to the tolerance, "
                    "not bitwise)")
+    #: the compiled loops (one group, the ensemble's groups) of the rigid body and of extended models
+    group_loops = {False: (kd.advance_group, kd.advance_lanes), True: (kd.advance_group_wide, kd.advance_lanes_wide)}
 
     def __init__(self, **kw):
         super().__init__(**kw)
         lanes = self.opts.get("lanes", 32)
         if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or lanes < 1:
-            raise InputError(f"lanes: {lanes!r} is not a positive integer")
+            raise InputError(f"lanes: {lanes!r} is not a positive integer; give e.g. lanes = 32")
         self.lanes = int(lanes)
 
     def start(self, problem):
-        if problem.step_ends:
-            raise InputError("t_span: method 'dop853-lanes' needs output times t (e.g. t=[t0, t_end])")
         super().start(problem)
+        extended = self.one is self.loops[True][0]
+        self.group, self.groups = self.group_loops[extended]
         G = (problem.members + self.lanes - 1) // self.lanes
         self.GST, self.GCNT, _ = kd.new_state(G)
         self._start_states(self.GST)
         self.GWORK = kp.new_work(G)
         self.gstatus = np.full(G, kd.PAUSED, dtype=np.int64)
+        if problem.step_ends:  # one member (no ensemble): every step end, a group of one
+            self.rec_y = self.rec_y[None]
 
     def advance(self, budget):
         p = self.p
         if self.t_k.shape[0] == 0:
             return True
-        kdl.advance_lanes(self.Y, self.GST, self.GCNT, self.F0, self.t_k, self.out, self.gstatus, p.inertia,
-                         *self.kernel, self.GWORK, self.lanes, self.rtol, self.atol, self.max_step,
-                         self.max_steps, budget_limit(budget))
+        budget = budget_limit(budget)
+        if p.step_ends:
+            while True:
+                st = self.group(self.Y, self.GST[0], self.GCNT[0], self.F0, self.t_k, self.rec_t, self.rec_y, True,
+                                p.inertia, *self.kernel, self.GWORK[0], self.rtol, self.atol, self.max_step,
+                                self.max_steps, budget)
+                if st != kd.BUFFER_FULL:
+                    break
+                n = self.rec_t.shape[0]
+                self.rec_t = np.concatenate([self.rec_t, np.empty(n)])
+                self.rec_y = np.concatenate([self.rec_y, np.empty((1, n, self.rec_y.shape[2]))], axis=1)
+            self.gstatus[0] = st
+        else:
+            self.groups(self.Y, self.GST, self.GCNT, self.F0, self.t_k, self.out, self.gstatus, p.inertia,
+                        *self.kernel, self.GWORK, self.lanes, self.rtol, self.atol, self.max_step,
+                        self.max_steps, budget)
         return self.check_status(self.gstatus)
 
     def failure_point(self, g):
@@ -239,6 +262,8 @@ class DOP853Lanes(DOP853):
         return self._time(self.GST[g, kd.ST_T]), g * self.lanes + max(lane, 0)
 
     def outputs(self):
+        if self.p.step_ends:
+            return self._step_end_outputs(self.GCNT, self.rec_y[0])
         return self._grid_outputs(self.GCNT)
 
     def stats(self):
@@ -253,6 +278,21 @@ class DOP853Lanes(DOP853):
         s = super().settings()
         s["lanes"] = self.lanes
         return s
+
+
+@register
+class Vern98Lanes(DOP853Lanes):
+    """Verner's 9(8) pair over an ensemble in lockstep groups (the one step loop of
+    :class:`DOP853Lanes` with the pair of :class:`Vern98`)."""
+
+    name = "vern98-lanes"
+    order = 9
+    description = ("compiled Verner 9(8) for ensembles: groups of members share the step size and the orbit "
+                   "evaluation, vectorized over members (results agree with one-by-one runs to the tolerance, "
+                   "not bitwise)")
+    loops = Vern98.loops
+    group_loops = {False: (kd.advance_group_verner98, kd.advance_lanes_verner98),
+                   True: (kd.advance_group_wide_verner98, kd.advance_lanes_wide_verner98)}
 
 
 #: the values of the option ``independent_variable``

@@ -106,7 +106,7 @@ def test_environment_control_needs_its_fields():
     raises("control", orbatt.EnvironmentTorques, ORBIT, 10 * u.s, control="pd")
 
 
-@pytest.mark.parametrize("method", ["rk4", "splitting4", "dop853-lanes"])
+@pytest.mark.parametrize("method", ["rk4", "splitting4"])
 def test_methods_without_the_extended_state_refuse_wheels_and_control(method):
     body = orbatt.RigidBody(INERTIA, wheels=[wheel()])
     message = raises("method", propagate, body, orbatt.TorqueFree(), method=method)

@@ -166,6 +166,6 @@ def test_dop853_lanes_agrees_with_one_by_one_to_tolerance(sat):
         err_alone = angle(alone.q, ref.q).max(axis=1)
         assert err_lanes.max() < 2e-8
         assert np.all(err_lanes <= 2.0 * err_alone + 1e-12)
-        if lanes == 1:
+        if lanes == 1:  # a group of one lane runs the single loop's operations
             assert ens.stats["steps"] == alone.stats["steps"]
-            assert angle(ens.q, alone.q).max() < 1e-13
+            np.testing.assert_array_equal(ens.q, alone.q)

@@ -1,0 +1,403 @@
+"""The one adaptive Runge-Kutta step loop, written once and instantiated (:func:`loop_of`) for one
+trajectory and for a group of ensemble members in lockstep ("lanes"), for each Runge-Kutta pair
+of :data:`orbatt.core.step_control.TABLEAUS` (DOP853, Verner 9(8)), for the rigid body and for
+extended models (reaction wheels, control laws: :mod:`orbatt.core.gyrostat`), and for a
+binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`, one trajectory).
+
+The loop keeps its working copies in structure-of-arrays layout, lane index last: the state
+``yg (n, nl)``, the stages ``K (stages + 1, n, nl)``. One trajectory is the group of one lane
+(``nl = 1``, a constant of its closure, so the lane loops fold away and the single loop runs
+the operations it always ran, bit for bit; its working arrays are the contiguous vectors its
+right-hand side takes, which the loop indexes through ``(n, 1)`` views); a group of ``nl`` members shares the time, the step
+size and the orbit's evaluation at each stage, and its per-member loops over the lanes
+vectorize. Everything else - the stages, the error estimate, the controller, the landing on
+output times and breakpoints, acceptance and rejection, the outputs (at the output times, or
+every accepted step: ``record_all``) and the resumable state - is the same code for both. A
+group's error is the largest of its members' norms, so every member meets the tolerance it
+would meet alone; its counters count group steps and group right-hand-side evaluations.
+
+What differs between the instantiations is a constant of the closure (numba prunes the
+branches not taken, so a loop compiles only its own right-hand side): where the members come
+from and go to (``y (n,)`` or ``Y (nl, n)``), and which right-hand side a stage calls:
+
+=============  ============================================  ==============================================
+instantiation  one trajectory                                lanes
+=============  ============================================  ==============================================
+rigid body     :func:`~orbatt.core.hamiltonian.rhs` (stages  :func:`~orbatt.core.hamiltonian.rhs_lanes`
+               inline: ``rhs_inline``)
+extended       :func:`~orbatt.core.gyrostat.rhs_extended`    :func:`~orbatt.core.gyrostat.rhs_extended_lanes`
+coupled        :func:`~orbatt.core.mutual.rhs_coupled`       (not instantiated)
+=============  ============================================  ==============================================
+
+The method and its controller are described in :mod:`orbatt.core.dop853`, which holds the
+instances; the building blocks are in :mod:`orbatt.core.step_control`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, INTERPRETED,
+                   borrow, borrow_model, jit, jit_inline, keepalive)
+from .gyrostat import rhs_extended, rhs_extended_lanes
+from .hamiltonian import rhs, rhs_inline, rhs_lanes
+from .model import next_breakpoint
+from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
+from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, ST_FACOLD, ST_H, ST_HMIN, ST_T, TABLEAUS,
+                           accept_step, all_finite, begin_attempt, controller, controller9, error_norm, hinit_der2,
+                           hinit_guess, hinit_norms, hinit_refine, momentum_scale, reject_nonfinite, reject_step)
+
+__all__ = ["loop_of", "stage_input"]
+
+
+@jit_inline
+def stage_input(ytmp, yg, K, s, hh, A_PTR, A_COL, A_VAL, ncomp, nl):
+    """``ytmp = yg + hh sum_j a_sj K[j]``: the input of stage ``s`` (sparse tableau ``A_PTR,
+    A_COL, A_VAL``) for the lanes ``(n, nl)``, lanes innermost (vectorized)."""
+    for i in range(ncomp):
+        for l in range(nl):
+            ytmp[i, l] = 0.0
+    for jj in range(A_PTR[s], A_PTR[s + 1]):
+        a = A_VAL[jj]
+        j = A_COL[jj]
+        for i in range(ncomp):
+            for l in range(nl):
+                ytmp[i, l] += a * K[j, i, l]
+    for i in range(ncomp):
+        for l in range(nl):
+            ytmp[i, l] = yg[i, l] + hh * ytmp[i, l]
+
+
+if INTERPRETED:
+    def stage_input(ytmp, yg, K, s, hh, A_PTR, A_COL, A_VAL, ncomp, nl):  # noqa: F811
+        """:func:`stage_input` for the interpreted kernels (the cold start, :mod:`orbatt.coldstart`):
+        the same elementwise IEEE operations in the same order for every component, so the same
+        bits, as numpy array operations instead of Python's loops over components and lanes
+        (those made the interpreted single loop, a group of one lane, ~30 % slower per step)."""
+        y = ytmp[:ncomp, :nl]
+        y[...] = 0.0
+        for jj in range(A_PTR[s], A_PTR[s + 1]):
+            y += A_VAL[jj] * K[A_COL[jj], :ncomp, :nl]
+        y[...] = yg[:ncomp, :nl] + hh * y
+
+
+def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
+    """The adaptive step loop for states of ``width`` components (0: any width, from the
+    arrays), on the rigid body's right-hand side or (``extended``) the gyrostat's, or
+    (``coupled``, one trajectory only) a binary's, with the Runge-Kutta pair ``tableau`` (a key
+    of :data:`~orbatt.core.step_control.TABLEAUS`: ``"dop853"``, Hairer's error norm and the
+    controller's exponent 1/8, or ``"verner98"``: ``err = |h| rms((E . K) / sk)`` and 1/9),
+    for one trajectory or (``lanes``) a lockstep group.
+
+    All five are constants of the closure: numba prunes the branches not taken, so the rigid
+    body's loop does not compile the extended right-hand side, and they keep the on-disk cache
+    key the same from one process to the next (a closure over a dispatcher object would not: it
+    pickles differently in every process). The rigid body's loops keep the constant width 8,
+    which LLVM unrolls. ``coupled``: :func:`orbatt.core.mutual.rhs_coupled`, ``inertia`` its
+    constants ``c`` (absolute tolerances ``atol * c[C_ATOL + i]``)."""
+    N_STAGES, A_PTR, A_COL, A_VAL, C, B, E5, E3 = TABLEAUS[tableau]
+    VERNER = tableau == "verner98"
+    WIDTH = width
+    EXTENDED = extended
+    COUPLED = coupled
+    LANES = lanes
+    if coupled and lanes:
+        raise ValueError("loop_of: the coupled form runs one trajectory (lanes=False)")
+
+    def advance(y, st, cnt, f0, t_out, rec_t, out_y, record_all, inertia, terms, params, table, work, rtol, atol,
+                max_step, max_steps, budget):
+        """Advance one trajectory, or a group of members in lockstep, towards the output times
+        ``t_out[cnt[CNT_IOUT]:]``.
+
+        Parameters
+        ----------
+        y : state(s), updated in place: one trajectory ``(n,)``, ``(q, Q)`` (n = 8) or
+            ``(q, Q, h)`` with the reaction wheels' axial momenta ``h`` (n = 8 + wheels;
+            :mod:`orbatt.core.gyrostat`), at ``st[ST_T]``; lanes ``(nl, n)``, one row a member.
+        st, cnt : integrator state (:func:`orbatt.core.step_control.new_state`) of the
+            trajectory or of the group (one time, one step size); updated in place. A group's
+            counters count group steps and group evaluations; on a failure
+            ``(cnt[CNT_FLAGS] >> BAD_LANE_SHIFT) - 1`` is the first failing lane.
+        f0 : the derivative at ``y`` (FSAL), shaped as ``y``; updated in place.
+        t_out : (N,) increasing output times, all after ``st[ST_T]``.
+        rec_t, out_y : outputs. Default mode: ``out_y[i]`` (N, n) receives ``y(t_out[i])``
+            (lanes: ``out_y[l, i]``, ``(nl, N, n)``; ``rec_t`` unused). ``record_all``: every
+            accepted step appends its time to ``rec_t`` and its state(s) to ``out_y`` (row
+            ``cnt[CNT_NREC]``; capacity ``len(rec_t)``; returns :data:`BUFFER_FULL` when
+            full); integration stops at ``t_out[-1]``.
+        inertia : principal moments ``(3,)``, lanes ``(nl, 3)`` (coupled: the constants).
+        terms, params, table, work : the model (:mod:`orbatt.core.model`) and its scratch (one
+            for a group: one orbit).
+        rtol, atol, max_step : tolerances (scipy's meaning) and the largest step allowed.
+        max_steps : limit on step attempts (accepted + rejected) over the whole run.
+        budget : step attempts allowed in this call.
+
+        Returns a status code (:data:`DONE`, :data:`PAUSED`, ...).
+        """
+        nout = t_out.shape[0]
+        i_out = cnt[CNT_IOUT]
+        if i_out >= nout:
+            return DONE
+        if LANES:
+            nl = y.shape[0]
+            ncomp = WIDTH if WIDTH > 0 else y.shape[1]
+        else:
+            nl = 1
+            ncomp = WIDTH if WIDTH > 0 else y.shape[0]
+        terms, params, table, work = borrow_model(terms, params, table, work)
+        inertia = borrow(inertia)
+        if LANES:
+            Kown = np.empty((N_STAGES + 1, ncomp, nl))
+            tmpown = np.empty((3, ncomp, nl))
+            K = borrow(Kown)
+            yg = borrow(tmpown[0])
+            ytmp = borrow(tmpown[1])
+            ynew = borrow(tmpown[2])
+        else:
+            # the one lane's working arrays are the contiguous vectors the right-hand sides take
+            # (as the single loop always had them); the loop indexes their (n, 1) views
+            Kown = np.empty((N_STAGES + 1, ncomp))
+            tmpown = np.empty((3, ncomp))
+            K1 = borrow(Kown)
+            y1 = borrow(tmpown[0])
+            ytmp1 = borrow(tmpown[1])
+            ynew1 = borrow(tmpown[2])
+            K = K1[:, :, np.newaxis]
+            yg = y1[:, np.newaxis]
+            ytmp = ytmp1[:, np.newaxis]
+            ynew = ynew1[:, np.newaxis]
+        sown = np.empty((10, nl))
+        sv = borrow(sown)
+        I = sv[0:3]  # noqa: E741 - the lanes' principal moments (3, nl)
+        G = sv[3:7]  # scratch of rhs_lanes
+        aQ = sv[7]   # the lanes' absolute tolerance of Q
+        e5 = sv[8]   # the lanes' sums of squares of the error estimates
+        e3 = sv[9]
+        # --- the members in: (n, nl) working copies
+        if LANES:
+            for l in range(nl):
+                for i in range(ncomp):
+                    yg[i, l] = y[l, i]
+                    K[0, i, l] = f0[l, i]
+                for i in range(3):
+                    I[i, l] = inertia[l, i]
+                aQ[l] = atol * momentum_scale(inertia[l])
+        else:
+            for i in range(ncomp):
+                yg[i, 0] = y[i]
+                K[0, i, 0] = f0[i]
+            aQ[0] = atol * momentum_scale(inertia)
+        t = st[ST_T]
+        h = st[ST_H]
+        facold = st[ST_FACOLD]
+        if facold <= 0.0:
+            facold = 1.0e-4
+        flags = cnt[CNT_FLAGS] & FLAG_BITS
+        status = DONE
+        if (flags & FLAG_F0_VALID) == 0:
+            if LANES:
+                if EXTENDED:
+                    rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])
+                else:
+                    rhs_lanes(t, yg, nl, I, terms, params, table, work, G, K[0])
+            elif COUPLED:
+                rhs_coupled(t, y1, inertia, terms, params, table, work, K1[0])
+            elif EXTENDED:
+                rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
+            else:
+                rhs(t, y1, inertia, terms, params, table, work, K1[0])
+            cnt[CNT_NFEV] += 1
+            flags |= FLAG_F0_VALID
+        if h <= 0.0:
+            # Hairer's hinit (order 8) for each member, the smallest: a first step from the sizes
+            # of y, f and an estimate of the second derivative (one extra evaluation)
+            hmax = min(max_step, t_out[nout - 1] - t)
+            for l in range(nl):
+                if COUPLED:
+                    dnf, dny = hinit_norms_vec(yg[:, l], K[0, :, l], atol, inertia, rtol)
+                else:
+                    dnf, dny = hinit_norms(yg[:, l], K[0, :, l], atol, aQ[l], rtol)
+                hl = min(hinit_guess(dnf, dny), hmax)
+                h = hl if l == 0 else min(h, hl)
+            if h > 0.0 and h < np.inf:
+                h0 = h
+                for i in range(ncomp):
+                    for l in range(nl):
+                        ytmp[i, l] = yg[i, l] + h0 * K[0, i, l]
+                if LANES:
+                    if EXTENDED:
+                        rhs_extended_lanes(t + h0, ytmp, nl, I, terms, params, table, work, K[1])
+                    else:
+                        rhs_lanes(t + h0, ytmp, nl, I, terms, params, table, work, G, K[1])
+                elif COUPLED:
+                    rhs_coupled(t + h0, ytmp1, inertia, terms, params, table, work, K1[1])
+                elif EXTENDED:
+                    rhs_extended(t + h0, ytmp1, inertia, terms, params, table, work, K1[1])
+                else:
+                    rhs(t + h0, ytmp1, inertia, terms, params, table, work, K1[1])
+                for l in range(nl):
+                    if COUPLED:
+                        dnf, _ = hinit_norms_vec(yg[:, l], K[0, :, l], atol, inertia, rtol)
+                        der2 = hinit_der2_vec(yg[:, l], K[0, :, l], K[1, :, l], atol, inertia, rtol)
+                    else:
+                        dnf, _ = hinit_norms(yg[:, l], K[0, :, l], atol, aQ[l], rtol)
+                        der2 = hinit_der2(yg[:, l], K[0, :, l], K[1, :, l], atol, aQ[l], rtol)
+                    hl = min(100.0 * abs(h0), hinit_refine(der2, dnf, h0), hmax)
+                    h = hl if l == 0 else min(h, hl)
+            cnt[CNT_NFEV] += 1
+            if not (h > 0.0 and h < np.inf):
+                h = 1e-6 * max(1.0, abs(t_out[nout - 1] - t))
+        reject = (flags & FLAG_REJECTED) != 0
+        attempts = 0
+        # step-size floor: 10 ulps of the largest time involved (Hairer's test uses |t| only,
+        # which lets a run starting at t = 0 crawl with steps of 1e-300)
+        hmin = max(st[ST_HMIN], 10.0 * EPS * max(abs(t), abs(t_out[nout - 1])))
+        cap = rec_t.shape[0]
+        bad_lane = -1
+        t_brk = next_breakpoint(t, terms, params, table)
+        while i_out < nout:
+            if record_all and cnt[CNT_NREC] >= cap:
+                status = BUFFER_FULL
+                break
+            status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out,
+                                                        hmin, flags, t_brk)
+            if status != DONE:
+                break
+            # --- the stages
+            for s in range(1, N_STAGES):
+                stage_input(ytmp, yg, K, s, hh, A_PTR, A_COL, A_VAL, ncomp, nl)
+                if LANES:
+                    if EXTENDED:
+                        rhs_extended_lanes(t + C[s] * hh, ytmp, nl, I, terms, params, table, work, K[s])
+                    else:
+                        rhs_lanes(t + C[s] * hh, ytmp, nl, I, terms, params, table, work, G, K[s])
+                elif COUPLED:
+                    rhs_coupled(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
+                elif EXTENDED:
+                    rhs_extended(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
+                else:
+                    rhs_inline(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
+            cnt[CNT_NFEV] += N_STAGES - 1
+            # --- the solution and each member's error estimate (lanes innermost: vectorized)
+            for l in range(nl):
+                e5[l] = 0.0
+                e3[l] = 0.0
+            for i in range(ncomp):
+                for l in range(nl):
+                    acc = 0.0
+                    a5 = 0.0
+                    a3 = 0.0
+                    for j in range(N_STAGES):
+                        kji = K[j, i, l]
+                        acc += B[j] * kji
+                        a5 += E5[j] * kji
+                        if not VERNER:
+                            a3 += E3[j] * kji
+                    ynew[i, l] = yg[i, l] + hh * acc
+                    if COUPLED:
+                        ai = atol * inertia[C_ATOL + i]
+                    else:
+                        ai = atol if i < 4 else aQ[l]
+                    isk = 1.0 / (ai + rtol * max(abs(yg[i, l]), abs(ynew[i, l])))
+                    a5 *= isk
+                    e5[l] += a5 * a5
+                    if not VERNER:
+                        a3 *= isk
+                        e3[l] += a3 * a3
+            err = 0.0  # the group's: the largest of the members' errors
+            for l in range(nl):
+                if VERNER:
+                    el = abs(hh) * math.sqrt(e5[l] / ncomp)
+                else:
+                    el = error_norm(e5[l], e3[l], hh, ncomp)
+                if not (el < np.inf):
+                    err = np.inf
+                    bad_lane = l
+                    break
+                err = max(err, el)
+            attempts += 1
+            if not (err < np.inf):  # NaN or inf: shrink hard and retry
+                flags, h, reject = reject_nonfinite(cnt, flags, hh)
+                continue
+            if VERNER:
+                fac11, hnew = controller9(err, facold, hh)
+            else:
+                fac11, hnew = controller(err, facold, hh)
+            if err <= 1.0:
+                # accepted: the derivative at the new point (FSAL; Verner's first stage)
+                t_new = t_next if landing else t + hh
+                if LANES:
+                    if EXTENDED:
+                        rhs_extended_lanes(t_new, ynew, nl, I, terms, params, table, work, K[N_STAGES])
+                    else:
+                        rhs_lanes(t_new, ynew, nl, I, terms, params, table, work, G, K[N_STAGES])
+                elif COUPLED:
+                    rhs_coupled(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
+                elif EXTENDED:
+                    rhs_extended(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
+                else:
+                    rhs(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
+                cnt[CNT_NFEV] += 1
+                finite = True
+                for l in range(nl):
+                    if not all_finite(K[N_STAGES, :, l], ncomp):
+                        finite = False
+                        bad_lane = l
+                        break
+                if not finite:
+                    flags, h, reject = reject_nonfinite(cnt, flags, hh)
+                    continue
+                flags, facold, hnew, reject = accept_step(cnt, flags, err, hnew, hh, h, max_step, reject, landing)
+                for i in range(ncomp):
+                    for l in range(nl):
+                        yg[i, l] = ynew[i, l]
+                        K[0, i, l] = K[N_STAGES, i, l]
+                t = t_new
+                row = -1
+                if landing and t == t_out[i_out]:  # (else a breakpoint)
+                    if not record_all:
+                        row = i_out
+                    i_out += 1
+                if t >= t_brk:
+                    t_brk = next_breakpoint(t, terms, params, table)
+                if record_all:
+                    row = cnt[CNT_NREC]
+                    rec_t[row] = t
+                    cnt[CNT_NREC] = row + 1
+                if row >= 0:  # --- the members out: an output row
+                    if LANES:
+                        for l in range(nl):
+                            for i in range(ncomp):
+                                out_y[l, row, i] = yg[i, l]
+                    else:
+                        for i in range(ncomp):
+                            out_y[row, i] = yg[i, 0]
+                h = hnew
+            else:
+                flags, h, reject = reject_step(cnt, flags, hh, fac11)
+        # --- the members and the integrator state out
+        if LANES:
+            for l in range(nl):
+                for i in range(ncomp):
+                    y[l, i] = yg[i, l]
+                    f0[l, i] = K[0, i, l]
+        else:
+            for i in range(ncomp):
+                y[i] = yg[i, 0]
+                f0[i] = K[0, i, 0]
+        st[ST_T] = t
+        st[ST_H] = h
+        st[ST_FACOLD] = facold
+        flags = (flags & ~FLAG_REJECTED) | (FLAG_REJECTED if reject else 0)
+        if LANES:
+            flags |= (bad_lane + 1) << BAD_LANE_SHIFT
+        cnt[CNT_FLAGS] = flags
+        cnt[CNT_IOUT] = i_out
+        keepalive(Kown)
+        keepalive(tmpown)
+        keepalive(sown)
+        return status
+
+    return jit(advance)
+
