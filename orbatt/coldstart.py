@@ -317,10 +317,6 @@ def warm_up(scenario, method, stamp, package=None) -> int:
     stamp and returns 3."""
     if package is not None and Path(package).resolve() != _PACKAGE:
         return 3
-    try:
-        os.nice(10)  # behind the interpreted run it speeds up for
-    except (AttributeError, OSError):  # pragma: no cover - no nice() on this platform
-        pass
     from .scenario import load_scenario
 
     sc = load_scenario(scenario)
@@ -341,4 +337,8 @@ def warm_up(scenario, method, stamp, package=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover - the warm-up process (ColdStart.start_warm_up)
+    try:  # behind the interpreted run it speeds up for (the process only: warm_up called in
+        os.nice(10)  # a test or a notebook must not lower its caller's priority for good)
+    except (AttributeError, OSError):  # no nice() on this platform
+        pass
     sys.exit(warm_up(*sys.argv[1:5]))

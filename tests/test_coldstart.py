@@ -148,7 +148,9 @@ def test_warm_up_writes_the_stamp_and_the_run_switches(tmp_path):
     report = cold.progress(seen.append)
     info = ProgressInfo(0.5, 1.0, 2.0, 10, 0.1)
     assert report(info) is None and seen == [info] and not cold.is_warm()
+    nice = os.nice(0)
     assert coldstart.warm_up("paper-torque-free", "", cold.stamp) == 0
+    assert os.nice(0) == nice  # the warm-up process lowers its own priority, never its caller's
     assert cold.is_warm() and json.loads(cold.stamp.read_text()) == coldstart.fingerprint()
     assert report(info) is False and cold.switched and seen == [info] and cold.projected is None
 
