@@ -53,8 +53,8 @@ PATHS = {
 def active() -> dict:
     """``{name: bool}``: which fast paths this process may use (a library check that fails
     later turns its path off then). Imports xarray (for ``xarray-direct``'s check)."""
-    from .core import _jit
+    from .core import fast_paths_in_use
     from .dataset import assembly
 
-    return {"numba-cache-loads": bool(_jit.FAST_LOADS), "borrowed-arrays": bool(_jit.BORROWED),
-            "xarray-direct": bool(assembly.DIRECT), "accessor-hook": ENABLED, "interpreted-first": ENABLED}
+    return {**fast_paths_in_use(), "xarray-direct": bool(assembly.DIRECT), "accessor-hook": ENABLED,
+            "interpreted-first": ENABLED}

@@ -50,3 +50,12 @@ from __future__ import annotations
 from ._jit import INTERPRETED
 
 __all__ = ["INTERPRETED"]
+
+
+def fast_paths_in_use() -> dict:
+    """``{"numba-cache-loads": bool, "borrowed-arrays": bool}``: the compiled kernels' fast
+    paths (:mod:`orbatt.fast_paths`) this process uses now (a cache load that found numba's
+    internals changed has turned its path off)."""
+    from . import _jit
+
+    return {"numba-cache-loads": bool(_jit.FAST_LOADS), "borrowed-arrays": bool(_jit.BORROWED)}
