@@ -142,8 +142,10 @@ class RigidBody:
 
     @property
     def inertia_value(self):
-        """Principal moments as floats in the internal unit (kg km^2, or plain numbers)."""
-        return self._value
+        """Principal moments as floats in the internal unit (kg km^2, or plain numbers): a fresh
+        writeable copy (the body's own array stays frozen; a read-only array handed to a compiled
+        kernel is another numba type, which compiled the kernel a second time)."""
+        return self._value.copy()
 
     @property
     def inertia_unit(self):
