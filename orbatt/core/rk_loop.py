@@ -270,10 +270,12 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         gnew = swown[0]
         gscr = swown[1]
         if SWITCHES:
-            nsw = arm(t, y1, terms, params, table, work, gnew)
-            if nsw > 0 and st[ST_SWITCH_K] > 0.0:  # (resumed)
+            # st[ST_SWITCH_K]: 0 at the first call (the references to arm), then 1 + (the
+            # function of the located switch + 1, or 0); a resumed run keeps its references
+            nsw = arm(t, y1, terms, params, table, work, gnew, st[ST_SWITCH_K] == 0.0)
+            if nsw > 0 and st[ST_SWITCH_K] > 1.0:
                 t_sw = st[ST_SWITCH_T]
-                k_sw = int(st[ST_SWITCH_K]) - 1
+                k_sw = int(st[ST_SWITCH_K]) - 2
         while i_out < nout:
             if record_all and cnt[CNT_NREC] >= cap:
                 status = BUFFER_FULL
@@ -439,7 +441,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         st[ST_FACOLD] = facold
         if SWITCHES:
             st[ST_SWITCH_T] = t_sw if k_sw >= 0 else 0.0
-            st[ST_SWITCH_K] = k_sw + 1.0
+            st[ST_SWITCH_K] = k_sw + 2.0
         flags = (flags & ~FLAG_REJECTED) | (FLAG_REJECTED if reject else 0)
         if LANES:
             flags |= (bad_lane + 1) << BAD_LANE_SHIFT

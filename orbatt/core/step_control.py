@@ -40,7 +40,7 @@ ST_H = 1          # step size to try next (0: choose one, Hairer's hinit)
 ST_FACOLD = 2     # previous error (the PI controller's memory, exponent BETA)
 ST_HMIN = 3       # a floor on the step size set by the driver (0: none; see the module docstring)
 ST_SWITCH_T = 4   # a located switch the next steps land on (orbatt.core.switches) ...
-ST_SWITCH_K = 5   # ... and its function's index + 1 (0: none)
+ST_SWITCH_K = 5   # 0 before the first call, then 1 + (its function's index + 1, or 0: none)
 ST_SIZE = 6
 # ``cnt`` (int64):
 CNT_STEPS = 0     # accepted steps

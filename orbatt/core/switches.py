@@ -195,11 +195,14 @@ def locate(s, hh, y0, f0, y1, f1, g, n, terms, params, table, work, scratch):
         gb = g[k]
         if not (ga != 0.0 and gb == gb and ga == ga and (ga > 0.0) != (gb > 0.0)):
             continue
+        newpos = gb > 0.0  # the new sign (gb itself may become 0 below)
         a = 0.0
         b = 1.0
         side = 0
         for _ in range(100):
             if b - a <= THETA_TOL:
+                break
+            if gb == 0.0:  # the root itself
                 break
             x = b - gb * (b - a) / (gb - ga)
             if not (x > a and x < b):
@@ -212,7 +215,7 @@ def locate(s, hh, y0, f0, y1, f1, g, n, terms, params, table, work, scratch):
             if gx != gx:  # the function vanished inside: no root of it there
                 a = b = 1.0
                 break
-            if gx == 0.0 or (gx > 0.0) == (gb > 0.0):  # the new sign: the root is before x
+            if gx == 0.0 or (gx > 0.0) == newpos:  # the new sign: the root is at or before x
                 b = x
                 gb = gx
                 if side == 1:
@@ -248,12 +251,17 @@ def update(work, g, n, landed):
 
 
 @jit
-def arm(s, q, terms, params, table, work, g):
-    """The switching functions at the start of a loop call (``s``, attitude ``q``) into ``g``
-    and their references (:func:`update` with nothing landed); returns their number (0: the
-    model has none, or row 0's NO_SWITCHES flag)."""
+def arm(s, q, terms, params, table, work, g, first):
+    """The number of switching functions (0: the model has none, or row 0's NO_SWITCHES flag)
+    and, at the ``first`` call of a run, their values at its start (``s``, attitude ``q``) into
+    ``g`` and their references (:func:`update` with nothing landed). A resumed run keeps the
+    references it had (arming them again there is not what a run that did not stop does)."""
     n = switch_count(terms, params)
-    if n > 0:
+    if n > 0 and first:
+        # the warm starts (Kepler's equation, the tables' intervals) as they were: a resumed run
+        # evaluates the right-hand side from the same ones as a run that did not stop
+        warm = work[:SWITCH_SLOT].copy()
         switch_values(s, q, terms, params, table, work, g)
         update(work, g, n, -1)
+        work[:SWITCH_SLOT] = warm
     return n
