@@ -169,7 +169,7 @@ def test_an_edge_on_facet_is_one_switch_not_thousands():
     for tilt in (0.0, 1e-5):
         F = _facets()
         F[:, 4:7] = 0.0
-        F[4:, 1:4] = [[tilt, 0.0, 1.0], [tilt, 0.0, -1.0]]
+        F[4:, 1:4] = [[tilt, 0.5 * tilt, 1.0], [tilt, 0.5 * tilt, -1.0]]  # zeros apart from the side facets
         F[4:, 1:4] /= np.linalg.norm(F[4:, 1:4], axis=1)[:, None]
         model = km.build(orbit=(km.ORBIT_KEPLER, h, None),
                          terms=[(km.DRAG, km.drag_params(F, 0.0, EXPONENTIAL), None)])
