@@ -40,6 +40,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ._jit import jit
 from . import environment as env
 from .model import (DRAG, DRAG_HEADER, FLAGS, KIND, NO_SWITCHES, P0, R0, R1, SHADOW_CONICAL, SHADOW_CYLINDRICAL,
@@ -48,8 +50,8 @@ from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .qalg import rotate_inv
 from .torques import FACET_SIZE
 
-__all__ = ["REARM", "AT_START", "switch_count", "switch_values", "crossed", "locate", "update", "arm",
-           "shadow_edge_index", "MAX_SWITCHES", "SWITCH_SLOT"]
+__all__ = ["REARM", "AT_START", "switch_count", "switch_values", "shadow_edges", "crossed", "locate", "update", "arm",
+           "shadow_crossings", "eclipse_times", "MAX_SWITCHES", "SWITCH_SLOT"]
 
 #: a disarmed function is armed again once ``|g| > REARM`` at a step end
 REARM = 1.0e-3
@@ -79,25 +81,6 @@ def switch_count(terms, params):
             elif shadow == SHADOW_CYLINDRICAL:
                 n += 1
     return min(n, MAX_SWITCHES)
-
-
-@jit
-def shadow_edge_index(terms, params):
-    """The index of the first SRP term's outer shadow edge among the switching functions (the
-    conical penumbra's, the cylindrical edge), -1 if none: an eclipse begins where it turns
-    negative."""
-    n = 0
-    for j in range(1, terms.shape[0]):
-        kind = terms[j, KIND]
-        p0 = terms[j, P0]
-        if kind == DRAG:
-            n += int(params[p0 + 1])
-        elif kind == SRP:
-            n += int(params[p0 + 5])
-            shadow = params[p0 + 2]
-            if shadow == SHADOW_CONICAL or shadow == SHADOW_CYLINDRICAL:
-                return n
-    return -1
 
 
 @jit
@@ -131,26 +114,101 @@ def switch_values(s, q, terms, params, table, work, out):
                 out[n] = params[b + 1] * u[0] + params[b + 2] * u[1] + params[b + 3] * u[2]
             n += 1
         if kind == SRP:
-            shadow = params[p0 + 2]
-            if shadow != SHADOW_CONICAL and shadow != SHADOW_CYLINDRICAL:
-                continue
-            sun = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
-            rs = (r * xhat[0], r * xhat[1], r * xhat[2])
-            if shadow == SHADOW_CONICAL:
-                a, bb, cc = env.conical_geometry(rs, sun, params[p0 + 3], params[p0 + 4])
-                edges = ((cc - (a + bb)) / a, (cc - (bb - a)) / a, (cc - (a - bb)) / a)
-                for e in range(3):
-                    if n >= cap:
-                        return n
-                    out[n] = edges[e]
-                    n += 1
-            else:
-                along, perp2 = env.cylindrical_geometry(rs, sun)
+            ne, edges = shadow_edges(j, t, r, xhat, terms, params, table, work)
+            for e in range(ne):
                 if n >= cap:
                     return n
-                out[n] = math.sqrt(perp2 if along < 0.0 else perp2 + along * along) / params[p0 + 3] - 1.0
+                out[n] = edges[e]
                 n += 1
     return n
+
+
+@jit
+def shadow_edges(j, t, r, xhat, terms, params, table, work):
+    """``(n, (e0, e1, e2))``: the shadow's edge functions of the SRP term of row ``j`` at the
+    time ``t`` and the orbit's ``r``, ``xhat`` (the module's table; the unused ones 0): conical
+    ``n = 3`` (penumbra, umbra, annular), cylindrical ``n = 1``, no shadow ``n = 0``. The
+    first is the outer edge: negative in the shadow."""
+    p0 = terms[j, P0]
+    shadow = params[p0 + 2]
+    if shadow != SHADOW_CONICAL and shadow != SHADOW_CYLINDRICAL:
+        return 0, (0.0, 0.0, 0.0)
+    sun = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+    rs = (r * xhat[0], r * xhat[1], r * xhat[2])
+    if shadow == SHADOW_CONICAL:
+        a, b, c = env.conical_geometry(rs, sun, params[p0 + 3], params[p0 + 4])
+        return 3, ((c - (a + b)) / a, (c - (b - a)) / a, (c - (a - b)) / a)
+    along, perp2 = env.cylindrical_geometry(rs, sun)
+    return 1, (math.sqrt(perp2 if along < 0.0 else perp2 + along * along) / params[p0 + 3] - 1.0, 0.0, 0.0)
+
+
+@jit
+def _outer_edge(t, j, terms, params, table, work):
+    """The outer shadow edge function of the SRP term of row ``j`` at the time ``t``."""
+    _, _, r, xhat, _ = orbit_at(t, terms, params, table, work)
+    return shadow_edges(j, t, r, xhat, terms, params, table, work)[1][0]
+
+
+@jit
+def shadow_crossings(terms, params, table, t0, t1, dt, out):
+    """The times in ``[t0, t1]`` where the first shadowed SRP term's outer edge function
+    changes sign (a model whose orbit is in time, not in the eccentric anomaly): sampled every
+    ``dt`` (at most), each sign change bisected to ~1e-12 of the time; ``out[0, i]`` the time,
+    ``out[1, i]`` -1 at an entry into the shadow, +1 at an exit. Returns their number (at most
+    ``out.shape[1]``; 0 without a shadowed SRP term)."""
+    j = -1
+    for i in range(1, terms.shape[0]):
+        if terms[i, KIND] == SRP and (params[terms[i, P0] + 2] == SHADOW_CONICAL
+                                      or params[terms[i, P0] + 2] == SHADOW_CYLINDRICAL):
+            j = i
+            break
+    if j < 0 or not (t1 > t0):
+        return 0
+    work = np.full(SWITCH_SLOT, np.nan)
+    steps = max(1, int(math.ceil((t1 - t0) / dt)))
+    ta = t0
+    ga = _outer_edge(ta, j, terms, params, table, work)
+    n = 0
+    for i in range(1, steps + 1):
+        tb = t1 if i == steps else t0 + (t1 - t0) * (i / steps)
+        gb = _outer_edge(tb, j, terms, params, table, work)
+        if (ga < 0.0) != (gb < 0.0) and n < out.shape[1]:
+            lo, hi = ta, tb
+            for _ in range(200):
+                mid = 0.5 * (lo + hi)
+                if not (mid > lo and mid < hi):
+                    break
+                if (_outer_edge(mid, j, terms, params, table, work) < 0.0) == (ga < 0.0):
+                    lo = mid
+                else:
+                    hi = mid
+            out[0, n] = 0.5 * (lo + hi)
+            out[1, n] = 1.0 if ga < 0.0 else -1.0
+            n += 1
+        ta, ga = tb, gb
+    return n
+
+
+def eclipse_times(terms, params, table, t0, t1, dt=10.0):
+    """``(entry, exit)``: float64 arrays of the same length, the times (the model's time unit)
+    of each eclipse's entry into and exit from the first shadowed SRP term's shadow (its outer
+    edge: the penumbra's, conical) within ``[t0, t1]``, in order; NaN where the run starts or
+    ends inside an eclipse. Both empty without a shadowed SRP term or an eclipse. ``dt``: the
+    sampling (s) before bisection; an eclipse shorter than it may be missed."""
+    cap = int(math.ceil((t1 - t0) / dt)) + 2 if t1 > t0 else 2
+    out = np.empty((2, cap))
+    n = shadow_crossings(terms, params, table, float(t0), float(t1), float(dt), out)
+    entry, exit_ = [], []
+    for t, kind in zip(out[0, :n], out[1, :n]):
+        if kind < 0:
+            entry.append(t)
+            exit_.append(math.nan)
+        elif entry and math.isnan(exit_[-1]):
+            exit_[-1] = t
+        else:  # the run started in the shadow
+            entry.append(math.nan)
+            exit_.append(t)
+    return np.array(entry, dtype=np.float64), np.array(exit_, dtype=np.float64)
 
 
 @jit

@@ -234,3 +234,78 @@ def test_models_without_switches_do_not_change():
     _, Y2, c2 = _run(model, y0, t_out, False, switches=False)
     np.testing.assert_array_equal(Y1, Y2)
     np.testing.assert_array_equal(c1, c2)
+
+
+@pytest.mark.parametrize("kind", ["conical", "cylindrical"])
+def test_eclipse_times_are_the_shadow_functions_edges(kind):
+    """The eclipse entries and exits (the outer shadow edge's zeros along the orbit) against
+    a bisection of the shadow function itself (orbatt.environment.sun.shadow, numpy) on the
+    Keplerian positions: entry where it leaves 1, exit where it comes back; a window that
+    begins or ends inside an eclipse has no entry or no exit there (NaN)."""
+    from orbatt.environment.sun import shadow
+
+    sun = np.array([1.496e8 * 0.6, 1.496e8 * 0.8, 0.0])
+    model = _model(11000.0, km.SHADOW_CONICAL if kind == "conical" else km.SHADOW_CYLINDRICAL)
+
+    def lit(t):
+        _, _, _, pos, _ = kepler.kepler_many(np.atleast_1d(np.asarray(t, dtype=float)), ORB, GM)
+        return shadow(pos, sun, kind=kind, body_radius=6378.137, sun_radius=696000.0) == 1.0
+
+    def bisect(lo, hi):
+        a = lit(lo)[0]
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if lit(mid)[0] == a:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+    t = np.arange(0.0, 11000.0, 1.0)
+    s = lit(t)
+    edges = [bisect(t[i], t[i + 1]) for i in np.nonzero(s[1:] != s[:-1])[0]]
+    assert len(edges) == 4 and s[0]
+    entry, exit_ = ksw.eclipse_times(*model, 0.0, 11000.0)
+    np.testing.assert_allclose(entry, edges[0::2], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(exit_, edges[1::2], rtol=0, atol=1e-6)
+    entry, exit_ = ksw.eclipse_times(*model, 2000.0, 8000.0)  # from inside the first to inside the second
+    np.testing.assert_allclose(entry, [np.nan, edges[2]], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(exit_, [edges[1], np.nan], rtol=0, atol=1e-6)
+    model_none = _model(11000.0, km.SHADOW_NONE)
+    assert [x.size for x in ksw.eclipse_times(*model_none, 0.0, 11000.0)] == [0, 0]
+
+
+def test_the_eclipse_times_in_the_dataset_and_its_file(tmp_path):
+    """A scenario with SRP and the conical shadow: ``eclipse_entry`` / ``eclipse_exit`` are UTC
+    datetimes, the epoch plus the eclipse times of the scenario's model, and come back from the
+    NetCDF file (written through xarray and by ``orbatt run``'s direct writer) as they were;
+    every entry is followed by its exit ~36 min later (a LEO eclipse)."""
+    import warnings
+    from pathlib import Path
+
+    import orbatt
+    from orbatt.dataset.netcdf import write_netcdf
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "iss-tle-disturbances.toml"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = orbatt.load_scenario(path)
+        content = sc.run_content()
+    ds = content.to_dataset()
+    entry, exit_ = ds["eclipse_entry"].values, ds["eclipse_exit"].values
+    assert entry.dtype == np.dtype("datetime64[ns]") and entry.size == exit_.size >= 1
+    epoch = np.datetime64(ds.attrs["epoch"].rstrip("Z"), "ns")
+    t0, t1 = float(ds["elapsed"].values[0]), float(ds["elapsed"].values[-1])
+    e, x = ksw.eclipse_times(*sc.potential.kernel_model(), t0, t1)
+    ok = ~np.isnan(e)
+    np.testing.assert_allclose((entry[ok] - epoch) / np.timedelta64(1, "s"), e[ok], rtol=0, atol=1e-6)
+    both = ~np.isnat(entry) & ~np.isnat(exit_)
+    assert both.any()
+    minutes = (exit_[both] - entry[both]) / np.timedelta64(60, "s")
+    assert np.all((minutes > 25) & (minutes < 40))
+    for name, form in (("xarray.nc", ds), ("direct.nc", content)):
+        write_netcdf(form, tmp_path / name)
+        back = orbatt.open_dataset(tmp_path / name)
+        for v in ("eclipse_entry", "eclipse_exit"):
+            np.testing.assert_array_equal(back[v].values, ds[v].values)
+            assert back[v].attrs == ds[v].attrs
