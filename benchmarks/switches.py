@@ -12,7 +12,10 @@ completely). ``ref`` is the same angle between the references with and without s
 (how far the reference can be trusted). Attempts count accepted, rejected and retaken steps
 (``rej %``: rejected for their error; ``retake %``: retaken to end on a switch). Usage::
 
-    python benchmarks/switches.py [--only NAME ...] [--repeat N] [--horizon F]
+    python benchmarks/switches.py [--only NAME ...] [--repeat N] [--horizon F] [--work-precision]
+
+``--work-precision``: then, for each scenario with switches, the error and the right-hand-side
+evaluations at rtol = atol 1e-7 .. 1e-12, with and without location (accuracy per RHS).
 """
 from __future__ import annotations
 
@@ -54,9 +57,11 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*", default=None)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--horizon", type=float, default=0.1)
+    ap.add_argument("--work-precision", action="store_true")
     a = ap.parse_args(argv)
     print(f"{'scenario':28s} {'loc':>3s} {'attempts':>9s} {'rej %':>6s} {'retake %':>8s} {'RHS':>9s} "
           f"{'wall s':>8s} {'err rad':>9s} {'ref rad':>9s}")
+    switched = []
     for name, _, path in shipped_scenarios():
         if any(s in name for s in SKIP) or (a.only and name not in a.only):
             continue
@@ -76,12 +81,31 @@ def main(argv=None):
             for loc in (False, True):
                 tr, w = run(sc, loc, repeat=a.repeat)
                 rows.append((loc, tr, w))
+        if rows[1][1].stats["switch_retakes"]:
+            switched.append((name, sc, ref, m))
         for loc, tr, w in rows:
             s = tr.stats
             att = s["steps"] + s["rejected_steps"] + s["switch_retakes"]
             print(f"{name:28s} {'on' if loc else 'off':>3s} {att:9d} {100 * s['rejected_steps'] / att:6.2f} "
                   f"{100 * s['switch_retakes'] / att:8.2f} {s['rhs_evaluations']:9d} {w:8.3f} "
                   f"{angle(np.asarray(tr.q)[m], qref):9.2e} {dref:9.2e}")
+
+    if a.work_precision:
+        work_precision(switched)
+
+
+def work_precision(switched):
+    """Error (against the scenario's reference) and RHS evaluations over a range of tolerances,
+    location off and on."""
+    print(f"\n{'scenario':28s} {'rtol':>7s} {'RHS off':>9s} {'err off':>9s} {'RHS on':>9s} {'err on':>9s}")
+    for name, sc, ref, m in switched:
+        qref = np.asarray(ref.q)[m]
+        for rtol in (1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                res = [run(sc, loc, rtol=rtol)[0] for loc in (False, True)]
+            cols = " ".join(f"{r.stats['rhs_evaluations']:9d} {angle(np.asarray(r.q)[m], qref):9.2e}" for r in res)
+            print(f"{name:28s} {rtol:7.0e} {cols}")
 
 
 if __name__ == "__main__":
