@@ -135,7 +135,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         terms, params, table, work : the model (:mod:`orbatt.core.model`) and its scratch (one
             for a group: one orbit).
         rtol, atol, max_step : tolerances (scipy's meaning) and the largest step allowed.
-        max_steps : limit on step attempts (accepted + rejected) over the whole run.
+        max_steps : limit on step attempts (accepted + rejected + retaken for a switch) over the whole run.
         budget : step attempts allowed in this call.
 
         Returns a status code (:data:`DONE`, :data:`PAUSED`, ...).

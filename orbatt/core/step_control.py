@@ -226,14 +226,14 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out
     """``(status, hh, landing, t_next)`` before a step attempt towards the next output time
     ``t_out[i_out]`` or the next breakpoint ``t_brk`` if earlier
     (:func:`orbatt.core.model.next_breakpoint`), ``t_next``: :data:`DONE` to attempt the
-    step ``hh`` (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``,
-    step-size underflow)."""
+    step ``hh`` (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``:
+    accepted, rejected and retaken attempts, step-size underflow)."""
     t_next = t_out[i_out]
     if t_brk < t_next:
         t_next = t_brk
     if attempts >= budget:
         return PAUSED, 0.0, False, t_next
-    if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
+    if cnt[CNT_STEPS] + cnt[CNT_REJECTED] + cnt[CNT_SWITCHES] >= max_steps:
         return MAX_STEPS, 0.0, False, t_next
     hh, landing = plan_step(t, h, max_step, t_next)
     if hh <= 0.0 or (hh <= hmin and not landing):
