@@ -48,7 +48,7 @@ from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES, ST_FACOLD, ST_H, ST_HMIN,
                            ST_SWITCH_K, ST_SWITCH_T, ST_T, TABLEAUS, accept_step, all_finite, begin_attempt, controller, controller9, error_norm, hinit_der2,
                            hinit_guess, hinit_norms, hinit_refine, momentum_scale, reject_nonfinite, reject_step)
-from .switches import AT_START, arm, crossed, locate, switch_values, update
+from .switches import AT_START, crossed, locate, switch_count, switch_values, update
 
 __all__ = ["loop_of", "stage_input"]
 
@@ -272,7 +272,10 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         if SWITCHES:
             # st[ST_SWITCH_K]: 0 at the first call (the references to arm), then 1 + (the
             # function of the located switch + 1, or 0); a resumed run keeps its references
-            nsw = arm(t, y1, terms, params, table, work, gnew, st[ST_SWITCH_K] == 0.0)
+            nsw = switch_count(terms, params)
+            if nsw > 0 and st[ST_SWITCH_K] == 0.0:
+                switch_values(t, y1, terms, params, table, work, gnew)
+                update(work, gnew, nsw, -1)
             if nsw > 0 and st[ST_SWITCH_K] > 1.0:
                 t_sw = st[ST_SWITCH_T]
                 k_sw = int(st[ST_SWITCH_K]) - 2

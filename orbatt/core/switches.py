@@ -50,7 +50,7 @@ from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .qalg import rotate_inv
 from .torques import FACET_SIZE
 
-__all__ = ["REARM", "AT_START", "switch_count", "switch_values", "shadow_edges", "crossed", "locate", "update", "arm",
+__all__ = ["REARM", "AT_START", "switch_count", "switch_values", "shadow_edges", "crossed", "locate", "update",
            "shadow_crossings", "eclipse_times", "MAX_SWITCHES", "SWITCH_SLOT"]
 
 #: a disarmed function is armed again once ``|g| > REARM`` at a step end
@@ -306,20 +306,3 @@ def update(work, g, n, landed):
             work[SWITCH_SLOT + k] = math.nan
         elif abs(gk) > REARM or work[SWITCH_SLOT + k] == work[SWITCH_SLOT + k]:
             work[SWITCH_SLOT + k] = gk
-
-
-@jit
-def arm(s, q, terms, params, table, work, g, first):
-    """The number of switching functions (0: the model has none, or row 0's NO_SWITCHES flag)
-    and, at the ``first`` call of a run, their values at its start (``s``, attitude ``q``) into
-    ``g`` and their references (:func:`update` with nothing landed). A resumed run keeps the
-    references it had (arming them again there is not what a run that did not stop does)."""
-    n = switch_count(terms, params)
-    if n > 0 and first:
-        # the warm starts (Kepler's equation, the tables' intervals) as they were: a resumed run
-        # evaluates the right-hand side from the same ones as a run that did not stop
-        warm = work[:SWITCH_SLOT].copy()
-        switch_values(s, q, terms, params, table, work, g)
-        update(work, g, n, -1)
-        work[:SWITCH_SLOT] = warm
-    return n
