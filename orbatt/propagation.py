@@ -102,7 +102,8 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     Trajectory
         ``t (N,)``, ``q``/``Q`` ``(N, 4)`` or ``(E, N, 4)`` for ensembles, ``stats``
         (``steps``, ``rejected_steps``, ``rhs_evaluations`` or ``kicks``, ``wall_time_s``,
-        ``members``), ``settings``, ``complete`` (False after a KeyboardInterrupt or a stop
+        ``members``; the compiled Runge-Kutta methods also ``switch_retakes``: trial steps
+        retaken to end on a torque's switch, :mod:`orbatt.core.switches`), ``settings``, ``complete`` (False after a KeyboardInterrupt or a stop
         requested by the progress callback: then the outputs computed so far; for an ensemble
         the outputs every member has reached).
 

@@ -31,7 +31,8 @@ class Trajectory:
     settings : dict
         The method's settings (rtol, atol, step, order, ...), plain values.
     stats : dict
-        ``steps``, ``rhs_evaluations`` (or ``kicks``), ``rejected_steps``, ``wall_time_s``.
+        ``steps``, ``rhs_evaluations`` (or ``kicks``), ``rejected_steps``, ``wall_time_s`` (and
+        ``switch_retakes`` for the compiled Runge-Kutta methods).
     complete : bool
         False if the run was interrupted (KeyboardInterrupt): ``t, q, Q`` then hold what was
         computed.

@@ -72,9 +72,9 @@ import numpy as np
 from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_NONFINITE,
                    FLAG_REJECTED, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, jit_parallel)
 from .rk_loop import loop_of
-from .step_control import (BETA, CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_REJECTED, CNT_SIZE, CNT_STEPS, FAC_MAX,
-                           FAC_MIN, LAND_MARGIN, SAFETY, ST_FACOLD, ST_H, ST_HMIN, ST_SIZE, ST_T, TABLEAUS,
-                           begin_attempt, momentum_scale, new_state)
+from .step_control import (BETA, CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_REJECTED, CNT_SIZE, CNT_STEPS,
+                           CNT_SWITCHES, FAC_MAX, FAC_MIN, LAND_MARGIN, SAFETY, ST_FACOLD, ST_H, ST_HMIN, ST_SIZE,
+                           ST_SWITCH_K, ST_SWITCH_T, ST_T, TABLEAUS, begin_attempt, momentum_scale, new_state)
 
 #: the kernels, the state layout, and (re-exported for the Python drivers) the status codes and
 #: flag names of :mod:`orbatt.core._jit`
@@ -84,8 +84,9 @@ __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "ad
            "advance_group_wide_verner98", "advance_lanes", "advance_lanes_wide", "advance_lanes_verner98",
            "advance_lanes_wide_verner98", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE",
            "PAUSED", "BUFFER_FULL", "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED",
-           "FLAG_NONFINITE", "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE", "EPS",
-           "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE", "SAFETY",
+           "FLAG_NONFINITE", "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SWITCH_T",
+           "ST_SWITCH_K", "ST_SIZE", "EPS", "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS",
+           "CNT_SWITCHES", "CNT_SIZE", "SAFETY",
            "FAC_MIN", "FAC_MAX", "BETA", "LAND_MARGIN"]
 
 # ---------------------------------------------------------------------------------------

@@ -65,19 +65,7 @@ def shadow_conical(r_sat, r_sun, R_body, R_sun):
 
     ``r_sat``, ``r_sun``: positions relative to the occulting body's centre (km);
     ``R_body``, ``R_sun``: radii (km)."""
-    dx = r_sun[0] - r_sat[0]
-    dy = r_sun[1] - r_sat[1]
-    dz = r_sun[2] - r_sat[2]
-    d = math.sqrt(dx * dx + dy * dy + dz * dz)
-    rs = math.sqrt(r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2])
-    a = math.asin(min(R_sun / d, 1.0))      # apparent radius of the Sun
-    b = math.asin(min(R_body / rs, 1.0))    # apparent radius of the body
-    # apparent separation of the centres: angle between -r_sat and r_sun - r_sat
-    cx = -(r_sat[1] * dz - r_sat[2] * dy)
-    cy = -(r_sat[2] * dx - r_sat[0] * dz)
-    cz = -(r_sat[0] * dy - r_sat[1] * dx)
-    dot = -(r_sat[0] * dx + r_sat[1] * dy + r_sat[2] * dz)
-    c = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot)
+    a, b, c = conical_geometry(r_sat, r_sun, R_body, R_sun)
     if c >= a + b:
         return 1.0
     if c <= b - a:
@@ -92,6 +80,28 @@ def shadow_conical(r_sat, r_sun, R_body, R_sun):
     tb = 2.0 * math.atan2(y, (c * c + b * b - a * a) / (2.0 * c))
     area = 0.5 * (a * a * phi_minus_sin(ta) + b * b * phi_minus_sin(tb))
     return 1.0 - area / (math.pi * a * a)
+
+
+@jit_inline
+def conical_geometry(r_sat, r_sun, R_body, R_sun):
+    """``(a, b, c)`` (rad) of the conical shadow model seen from ``r_sat``: the apparent radii
+    of the Sun and of the occulting body and the apparent separation of their centres (the
+    shadow's edges: penumbra ``c = a + b``, umbra ``c = b - a``, annular ``c = a - b``).
+    Arguments as :func:`shadow_conical`."""
+    dx = r_sun[0] - r_sat[0]
+    dy = r_sun[1] - r_sat[1]
+    dz = r_sun[2] - r_sat[2]
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    rs = math.sqrt(r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2])
+    a = math.asin(min(R_sun / d, 1.0))      # apparent radius of the Sun
+    b = math.asin(min(R_body / rs, 1.0))    # apparent radius of the body
+    # apparent separation of the centres: angle between -r_sat and r_sun - r_sat
+    cx = -(r_sat[1] * dz - r_sat[2] * dy)
+    cy = -(r_sat[2] * dx - r_sat[0] * dz)
+    cz = -(r_sat[0] * dy - r_sat[1] * dx)
+    dot = -(r_sat[0] * dx + r_sat[1] * dy + r_sat[2] * dz)
+    c = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot)
+    return a, b, c
 
 
 @jit_inline
@@ -110,14 +120,23 @@ def shadow_cylindrical(r_sat, r_sun, R_body, R_sun):
     """Cylindrical shadow: 0 behind the body inside the cylinder of radius ``R_body`` along
     the Sun direction, else 1 (``R_sun`` unused; the same signature as
     :func:`shadow_conical`)."""
-    n = math.sqrt(r_sun[0] * r_sun[0] + r_sun[1] * r_sun[1] + r_sun[2] * r_sun[2])
-    along = (r_sat[0] * r_sun[0] + r_sat[1] * r_sun[1] + r_sat[2] * r_sun[2]) / n
+    along, perp2 = cylindrical_geometry(r_sat, r_sun)
     if along >= 0.0:
         return 1.0
-    r2 = r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2]
-    if r2 - along * along < R_body * R_body:
+    if perp2 < R_body * R_body:
         return 0.0
     return 1.0
+
+
+@jit_inline
+def cylindrical_geometry(r_sat, r_sun):
+    """``(along, perp2)`` of the cylindrical shadow model: the position's component along the
+    Sun direction and the square of its distance from the shadow's axis (the shadow's edge:
+    ``along < 0`` and ``perp2 = R_body^2``). Arguments as :func:`shadow_cylindrical`."""
+    n = math.sqrt(r_sun[0] * r_sun[0] + r_sun[1] * r_sun[1] + r_sun[2] * r_sun[2])
+    along = (r_sat[0] * r_sun[0] + r_sat[1] * r_sun[1] + r_sat[2] * r_sun[2]) / n
+    r2 = r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2]
+    return along, r2 - along * along
 
 
 # ---- sampled tables ------------------------------------------------------------------------

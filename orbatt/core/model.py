@@ -98,6 +98,9 @@ NEEDS_VELOCITY = 1
 #: row 0 ``FLAGS`` bit: the model has reaction wheels or a control law (the extended
 #: right-hand side of :mod:`orbatt.core.gyrostat`)
 EXTENDED = 2
+#: row 0 ``FLAGS`` bit: the step loops do not locate the model's switching functions
+#: (:mod:`orbatt.core.switches`; the ``switches = False`` option of the drivers)
+NO_SWITCHES = 4
 #: the kinds that make a model extended: they read the body rate (and the wheels' momenta)
 EXTENDED_KINDS = codes_where("extended")
 

@@ -47,8 +47,13 @@ EMPTY_TABLE = np.zeros((0, 0), dtype=np.float64)
 #: most terms of one model that own a sampled table (an environment field, a control law's
 #: field or Sun): each keeps its interval in a slot of ``work``
 MAX_TABLE_TERMS = 28
-#: scratch slots: 0..2 Kepler's warm start, 3 the sampled orbit, 4.. the tables of the terms
-WORK_SIZE = 4 + MAX_TABLE_TERMS
+#: most switching functions of one model the step loops locate (:mod:`orbatt.core.switches`)
+MAX_SWITCHES = 40
+#: the first scratch slot of the switching functions' references
+SWITCH_SLOT = 4 + MAX_TABLE_TERMS
+#: scratch slots: 0..2 Kepler's warm start, 3 the sampled orbit, 4.. the tables of the terms,
+#: then the switching functions' references (:mod:`orbatt.core.switches`)
+WORK_SIZE = SWITCH_SLOT + MAX_SWITCHES
 
 
 def new_work(*batch):

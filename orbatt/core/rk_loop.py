@@ -44,9 +44,11 @@ from .gyrostat import rhs_extended, rhs_extended_lanes
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
 from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
-from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, ST_FACOLD, ST_H, ST_HMIN, ST_T, TABLEAUS,
-                           accept_step, all_finite, begin_attempt, controller, controller9, error_norm, hinit_der2,
+from .potentials import MAX_SWITCHES, SWITCH_SLOT
+from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES, ST_FACOLD, ST_H, ST_HMIN,
+                           ST_SWITCH_K, ST_SWITCH_T, ST_T, TABLEAUS, accept_step, all_finite, begin_attempt, controller, controller9, error_norm, hinit_der2,
                            hinit_guess, hinit_norms, hinit_refine, momentum_scale, reject_nonfinite, reject_step)
+from .switches import AT_START, crossed, locate, switch_count, switch_values, update
 
 __all__ = ["loop_of", "stage_input"]
 
@@ -102,6 +104,9 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
     EXTENDED = extended
     COUPLED = coupled
     LANES = lanes
+    #: one trajectory of the rigid body or an extended model locates the switching functions
+    #: (orbatt.core.switches); lanes and the coupled form do not
+    SWITCHES = not lanes and not coupled
     if coupled and lanes:
         raise ValueError("loop_of: the coupled form runs one trajectory (lanes=False)")
 
@@ -130,7 +135,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         terms, params, table, work : the model (:mod:`orbatt.core.model`) and its scratch (one
             for a group: one orbit).
         rtol, atol, max_step : tolerances (scipy's meaning) and the largest step allowed.
-        max_steps : limit on step attempts (accepted + rejected) over the whole run.
+        max_steps : limit on step attempts (accepted + rejected + retaken for a switch) over the whole run.
         budget : step attempts allowed in this call.
 
         Returns a status code (:data:`DONE`, :data:`PAUSED`, ...).
@@ -256,14 +261,33 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         cap = rec_t.shape[0]
         bad_lane = -1
         t_brk = next_breakpoint(t, terms, params, table)
+        # --- the switching functions (orbatt.core.switches): references armed at t, the switch
+        # located by an earlier call that the next steps land on (t_sw, function k_sw)
+        nsw = 0
+        t_sw = np.inf
+        k_sw = -1
+        swown = np.empty((3, MAX_SWITCHES + 4))
+        gnew = swown[0]
+        gscr = swown[1]
+        if SWITCHES:
+            # st[ST_SWITCH_K]: 0 at the first call (the references to arm), then 1 + (the
+            # function of the located switch + 1, or 0); a resumed run keeps its references
+            nsw = switch_count(terms, params)
+            if nsw > 0 and st[ST_SWITCH_K] == 0.0:
+                switch_values(t, y1, terms, params, table, work, gnew)
+                update(work, gnew, nsw, -1)
+            if nsw > 0 and st[ST_SWITCH_K] > 1.0:
+                t_sw = st[ST_SWITCH_T]
+                k_sw = int(st[ST_SWITCH_K]) - 2
         while i_out < nout:
             if record_all and cnt[CNT_NREC] >= cap:
                 status = BUFFER_FULL
                 break
             status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out,
-                                                        hmin, flags, t_brk)
+                                                        hmin, flags, min(t_brk, t_sw))
             if status != DONE:
                 break
+            sw_land = landing and t_next == t_sw  # this attempt ends on the located switch
             # --- the stages
             for s in range(1, N_STAGES):
                 stage_input(ytmp, yg, K, s, hh, A_PTR, A_COL, A_VAL, ncomp, nl)
@@ -324,9 +348,15 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 fac11, hnew = controller9(err, facold, hh)
             else:
                 fac11, hnew = controller(err, facold, hh)
-            if err <= 1.0:
-                # accepted: the derivative at the new point (FSAL; Verner's first stage)
-                t_new = t_next if landing else t + hh
+            t_new = t_next if landing else t + hh
+            sw_cross = False
+            if SWITCHES:  # (a constant: `if` alone, so that numba prunes it from the other loops)
+                if nsw > 0 and not sw_land:  # an armed switching function changed sign?
+                    switch_values(t_new, ynew1, terms, params, table, work, gnew)
+                    sw_cross = crossed(work, gnew, nsw)
+            if err <= 1.0 or sw_cross:
+                # accepted (or to be located): the derivative at the new point (FSAL; Verner's
+                # first stage)
                 if LANES:
                     if EXTENDED:
                         rhs_extended_lanes(t_new, ynew, nl, I, terms, params, table, work, K[N_STAGES])
@@ -348,12 +378,35 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 if not finite:
                     flags, h, reject = reject_nonfinite(cnt, flags, hh)
                     continue
+                if SWITCHES:
+                    if sw_cross:
+                        # the earliest root on the step's interpolant: retake the step to end there
+                        theta, k = locate(t, t_new - t, y1, K1[0], ynew1, K1[N_STAGES], gnew, nsw, terms, params,
+                                          table, work, gscr)
+                        if k >= 0 and theta > AT_START:
+                            t_sw = t + theta * (t_new - t)
+                            k_sw = k
+                            cnt[CNT_SWITCHES] += 1
+                            continue
+                        if k >= 0:  # a root at the step's start: disarmed, no retake
+                            work[SWITCH_SLOT + k] = np.nan
+                        if err > 1.0:
+                            flags, h, reject = reject_step(cnt, flags, hh, fac11)
+                            continue
                 flags, facold, hnew, reject = accept_step(cnt, flags, err, hnew, hh, h, max_step, reject, landing)
                 for i in range(ncomp):
                     for l in range(nl):
                         yg[i, l] = ynew[i, l]
                         K[0, i, l] = K[N_STAGES, i, l]
                 t = t_new
+                if SWITCHES:
+                    if nsw > 0 and sw_land:
+                        switch_values(t, y1, terms, params, table, work, gnew)
+                    if nsw > 0:
+                        update(work, gnew, nsw, k_sw if sw_land else -1)
+                    if sw_land:
+                        t_sw = np.inf
+                        k_sw = -1
                 row = -1
                 if landing and t == t_out[i_out]:  # (else a breakpoint)
                     if not record_all:
@@ -389,6 +442,9 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         st[ST_T] = t
         st[ST_H] = h
         st[ST_FACOLD] = facold
+        if SWITCHES:
+            st[ST_SWITCH_T] = t_sw if k_sw >= 0 else 0.0
+            st[ST_SWITCH_K] = k_sw + 2.0
         flags = (flags & ~FLAG_REJECTED) | (FLAG_REJECTED if reject else 0)
         if LANES:
             flags |= (bad_lane + 1) << BAD_LANE_SHIFT
@@ -397,6 +453,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         keepalive(Kown)
         keepalive(tmpown)
         keepalive(sown)
+        keepalive(swown)
         return status
 
     return jit(advance)

@@ -21,8 +21,9 @@ from .dop853_coefficients import ORDER
 __all__ = ["new_state", "momentum_scale", "hinit_guess", "hinit_refine", "error_norm", "plan_step", "controller",
            "controller9", "pi_step", "next_after_accept", "next_after_reject", "reject_nonfinite", "reject_step",
            "accept_step", "hinit_norms", "hinit_der2", "all_finite", "failure", "begin_attempt", "TABLEAUS",
-           "SAFETY", "FAC_MIN", "FAC_MAX", "BETA", "LAND_MARGIN", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SIZE",
-           "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS", "CNT_SIZE"]
+           "SAFETY", "FAC_MIN", "FAC_MAX", "BETA", "LAND_MARGIN", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SWITCH_T",
+           "ST_SWITCH_K", "ST_SIZE", "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS",
+           "CNT_SWITCHES", "CNT_SIZE"]
 
 SAFETY = 0.9
 FAC_MIN = 0.333  # h_new >= FAC_MIN h   (Hairer's fac1)
@@ -38,7 +39,9 @@ ST_T = 0          # current time
 ST_H = 1          # step size to try next (0: choose one, Hairer's hinit)
 ST_FACOLD = 2     # previous error (the PI controller's memory, exponent BETA)
 ST_HMIN = 3       # a floor on the step size set by the driver (0: none; see the module docstring)
-ST_SIZE = 4
+ST_SWITCH_T = 4   # a located switch the next steps land on (orbatt.core.switches) ...
+ST_SWITCH_K = 5   # 0 before the first call, then 1 + (its function's index + 1, or 0: none)
+ST_SIZE = 6
 # ``cnt`` (int64):
 CNT_STEPS = 0     # accepted steps
 CNT_REJECTED = 1  # rejected steps (error too large or non-finite)
@@ -46,7 +49,8 @@ CNT_NFEV = 2      # right-hand-side evaluations
 CNT_IOUT = 3      # index of the next output time
 CNT_NREC = 4      # rows written to the record buffer (record_all mode)
 CNT_FLAGS = 5     # FLAG_* bits of orbatt.core._jit (and, for groups, the failing lane)
-CNT_SIZE = 6
+CNT_SWITCHES = 6  # trial steps retaken to end on a located switch (orbatt.core.switches)
+CNT_SIZE = 7
 
 
 def new_state(batch=None, width=NDIM):
@@ -222,14 +226,14 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out
     """``(status, hh, landing, t_next)`` before a step attempt towards the next output time
     ``t_out[i_out]`` or the next breakpoint ``t_brk`` if earlier
     (:func:`orbatt.core.model.next_breakpoint`), ``t_next``: :data:`DONE` to attempt the
-    step ``hh`` (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``,
-    step-size underflow)."""
+    step ``hh`` (:func:`plan_step`), else why to stop (budget of this call, ``max_steps``:
+    accepted, rejected and retaken attempts, step-size underflow)."""
     t_next = t_out[i_out]
     if t_brk < t_next:
         t_next = t_brk
     if attempts >= budget:
         return PAUSED, 0.0, False, t_next
-    if cnt[CNT_STEPS] + cnt[CNT_REJECTED] >= max_steps:
+    if cnt[CNT_STEPS] + cnt[CNT_REJECTED] + cnt[CNT_SWITCHES] >= max_steps:
         return MAX_STEPS, 0.0, False, t_next
     hh, landing = plan_step(t, h, max_step, t_next)
     if hh <= 0.0 or (hh <= hmin and not landing):

@@ -64,6 +64,7 @@ from ..terms import FIELD_VARIABLES
 from ..units import DIMENSIONLESS_UNITS, INTERNAL_UNITS, LEGACY_OUTPUT
 from ..version import __version__
 from .content import Content, Var
+from .eclipses import eclipse_variables
 from .timeaxis import (LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_unit,
                        elapsed_values)
 
@@ -477,6 +478,8 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         })
 
     data.update(_torque_variables(tr.potential, tau, t, tdims))
+    if not dimless:
+        data.update(eclipse_variables(tr.potential, t, epoch_s))
     extra = control_variables(tr, body, inertia, t, tdims, U)
     if "kinetic_energy" in extra:  # a gyrostat: its rate and energy replace the rigid body's
         extra["energy"] = _var(tdims, extra["kinetic_energy"].values + Upot, U["energy"], "total energy H = T + U")

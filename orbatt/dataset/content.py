@@ -77,11 +77,12 @@ class Content:
         ``"seconds since <epoch>"`` time becomes ``datetime64[ns]``, its ``units`` and
         ``calendar`` going into the variable's encoding: :mod:`orbatt.dataset.build`)."""
         from .assembly import assemble, decode_time
+        from .eclipses import decode_variables
 
         coords = self.coords
         if "time" in coords:
             coords = dict(coords, time=decode_time(coords["time"]))
-        return assemble(self.data_vars, coords, self.attrs)
+        return assemble(decode_variables(self.data_vars), coords, self.attrs)
 
     def __repr__(self):
         return f"Content({len(self.data_vars)} variables, sizes {self.sizes})"

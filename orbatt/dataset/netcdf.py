@@ -43,6 +43,7 @@ from ..units import LEGACY_OUTPUT
 from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, UNIT_SYSTEM, orbatt_version, utc_now
 from .content import Content, Var
+from .eclipses import TIME_VARIABLES, decode_variables, file_variables
 from .netcdf_direct import writable, write_content
 from .timeaxis import LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_values
 
@@ -90,13 +91,16 @@ def check_engine(engine):
 
 def encode(ds: xr.Dataset) -> xr.Dataset:
     """The file form: ``time`` as float64 ``seconds since <epoch>`` (the ``elapsed`` values,
-    :func:`file_time`), no stale encodings."""
+    :func:`file_time`), the eclipse times likewise (:func:`orbatt.dataset.eclipses.file_variables`),
+    no stale encodings."""
     out = ds.drop_encoding()  # new variables (attribute dicts copied, data shared)
-    if "time" in ds.coords:
+    dated = file_variables(ds)
+    if "time" in ds.coords or dated:
         from .assembly import assemble
 
         coords = {k: (file_time(ds) if k == "time" else out[k].variable) for k in out.coords}
-        out = assemble({k: out[k].variable for k in out.data_vars}, coords, out.attrs)  # the order kept
+        data = {k: dated.get(k, out[k].variable) for k in out.data_vars}
+        out = assemble(data, coords, out.attrs)  # the order kept
     return out
 
 
@@ -145,6 +149,9 @@ def decode(ds: xr.Dataset) -> xr.Dataset:
         ds.attrs["unit_system"] = UNIT_SYSTEM
     if "time" in ds.coords:
         ds = _decode_time_axis(ds, xr, decode_time)
+    dated = decode_variables({k: ds[k].variable for k in TIME_VARIABLES if k in ds.data_vars})
+    if dated:
+        ds = ds.assign(dated)
     for name in LABEL_COORDS:
         if name in ds.coords and ds[name].dtype.kind in "OS":
             vals = np.array([v.decode() if isinstance(v, bytes) else str(v) for v in ds[name].values])

@@ -19,7 +19,18 @@ from .problem import KernelSpec
 __all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes"]
 
 #: counters summed into the statistics
-_COUNTS = {"steps": kd.CNT_STEPS, "rejected_steps": kd.CNT_REJECTED, "rhs_evaluations": kd.CNT_NFEV}
+_COUNTS = {"steps": kd.CNT_STEPS, "rejected_steps": kd.CNT_REJECTED, "rhs_evaluations": kd.CNT_NFEV,
+           "switch_retakes": kd.CNT_SWITCHES}
+
+
+def switches_off(kernel, switches):
+    """``kernel`` itself, or (``switches`` False) a copy whose row 0 has the
+    :data:`orbatt.core.model.NO_SWITCHES` flag: the step loops do not locate its switches."""
+    if switches:
+        return kernel
+    terms = kernel.terms.copy()
+    terms[0, km.FLAGS] |= km.NO_SWITCHES
+    return KernelSpec(terms, kernel.params, kernel.table)
 
 
 @register
@@ -33,7 +44,10 @@ class DOP853(Method):
     extended = True
     options = {"max_step": "largest step allowed (time unit of the body); default no limit",
                "independent_variable": "'auto' (default: the eccentric anomaly on a Keplerian orbit, else the "
-                                       "time), 'eccentric-anomaly' or 'time'"}
+                                       "time), 'eccentric-anomaly' or 'time'",
+               "switches": "true (default): steps end on the zeros of the model's switching functions (a facet "
+                           "edge-on to the flow or the Sun, the shadow's edges; one trajectory at a time, not "
+                           "lanes); false: they straddle them"}
     description = "compiled adaptive Dormand-Prince 8(5,3), Hairer's step-size control"
     #: the compiled loops (one trajectory, ensemble) of the rigid body and of extended models
     loops = {False: (kd.advance, kd.advance_batch), True: (kd.advance_wide, kd.advance_batch_wide)}
@@ -54,6 +68,11 @@ class DOP853(Method):
                              f"{', '.join(map(repr, INDEPENDENT_VARIABLES))}; give e.g. independent_variable = 'auto'")
         self.independent = iv
         self.anomaly = None
+        sw = self.opts.get("switches", True)
+        if not isinstance(sw, (bool, np.bool_)):
+            raise InputError(f"switches: {sw!r} is not true or false; give switches = true (steps end on the "
+                             "switching functions' zeros) or false")
+        self.switches = bool(sw)
 
     def settings(self):
         s = super().settings()
@@ -114,7 +133,7 @@ class DOP853(Method):
         # kernel output times: those after t0 (outputs at t0 are the initial state)
         self.n0 = int(np.searchsorted(p.t_out, p.t0, side="right"))
         self.t_k = np.ascontiguousarray(p.t_out[self.n0:])
-        self.kernel = self._independent_variable(p)
+        self.kernel = switches_off(self._independent_variable(p), self.switches)
         self._start_states(self.ST)
         if p.step_ends:
             self.rec_t = np.empty(256)
