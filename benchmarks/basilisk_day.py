@@ -30,7 +30,9 @@ Times (median of ``--repeats``), all over the whole day:
 * whole processes: ``orbatt run CASE.toml -o X.nc --quiet`` (``python -m orbatt.cli``) on a
   scenario file of the case written by the script (warm numba cache: one run first, discarded)
   against a fresh ``python basilisk_day.py --basilisk-case JSON`` that imports Basilisk, builds
-  the simulation, executes it and saves the attitude at the outputs (``.npy``).
+  the simulation, executes it and saves the attitude at the outputs (``.npy``); the processes
+  run without ``PYTHONDONTWRITEBYTECODE`` (:func:`child_env`); a discarded Basilisk process
+  first too.
 
 Basilisk's Sun: ``facetSRPDynamicEffector`` reads a Sun message; the script writes astropy's
 Sun into it at the midpoint of every 60 s (Basilisk's pip package ships no SPICE kernels; the
@@ -43,6 +45,7 @@ import argparse
 import json
 import math
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -72,6 +75,14 @@ IMPORTS = {"orbatt": "import orbatt.cli",
 #: RHS evaluations per step (Basilisk's RKF78 at its default tolerances takes one step per task step)
 STAGES = {"rkf78": 13, "rk4": 4}
 DTS = {"rkf78": (8.0, 4.0, 2.0, 1.0, 0.5), "rk4": (8.0, 4.0, 2.0, 1.0, 0.5, 0.25, 0.125)}
+
+
+def child_env(**extra):
+    """The environment of a timed process: this one's without ``PYTHONDONTWRITEBYTECODE`` (set
+    on some machines; with it every process of an editable install compiles orbatt's ~100
+    modules again, ~0.2 s, where an installed package has its bytecode), plus ``extra``."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    return {**env, **extra}
 
 
 # --- the scenario file of the case (orbatt run)
@@ -104,22 +115,31 @@ def scenario_toml(rtol, t_end=DAY):
 
 
 def orbatt_process(toml, folder, warm=False):
-    """Wall time (s) of ``orbatt run`` on the scenario text ``toml`` in a fresh process, the
-    attitude it wrote ``(N, 4)`` and its ``integration_stats``. ``warm``: the discarded first
+    """Wall and CPU times (s, :func:`_process`) of ``orbatt run`` on the scenario text ``toml``
+    in a fresh process, the attitude it wrote ``(N, 4)`` and its ``integration_stats``. ``warm``: the discarded first
     run (``ORBATT_COLD_START=compile`` fills numba's cache, as ``benchmarks/startup.py``)."""
     import netCDF4
 
     path, out = Path(folder) / "case.toml", Path(folder) / "orbatt.nc"
     path.write_text(toml)
-    env = dict(os.environ, **({"ORBATT_COLD_START": "compile"} if warm else {}))
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "orbatt.cli", "run", str(path), "-o", str(out), "--quiet"], env=env,
-                   cwd=folder, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t0
+    env = child_env(**({"ORBATT_COLD_START": "compile"} if warm else {}))
+    wall = _process([sys.executable, "-m", "orbatt.cli", "run", str(path), "-o", str(out), "--quiet"], env=env,
+                    cwd=folder, stdout=subprocess.DEVNULL)
     with netCDF4.Dataset(out) as f:
         q = np.array(f.variables["q"][:], dtype=float)
         stats = json.loads(f.getncattr("integration_stats"))
     return wall, q * np.sign(q[:, :1]), stats
+
+
+def _process(argv, **kw):
+    """``(wall, cpu)`` seconds of one process: the wall time, and the child's user + system CPU
+    time (what a quiet machine would show as wall time, roughly, for a one-thread process)."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run(argv, check=True, **kw)
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
 # --- orbatt in-process
@@ -168,14 +188,14 @@ def basilisk_case(case):
 
 
 def basilisk_process(dt, method, folder, sun_table, t_end=DAY):
-    """Wall time (s) of a fresh ``python basilisk_day.py --basilisk-case JSON`` (imports, set-up,
-    execution, the attitude saved) and the attitude it saved."""
+    """Wall and CPU times (s, :func:`_process`) of a fresh ``python basilisk_day.py
+    --basilisk-case JSON`` (imports, set-up, execution, the attitude saved) and the attitude it
+    saved."""
     sun_path, out = Path(folder) / "sun.npy", Path(folder) / "basilisk.npy"
     np.save(sun_path, sun_table.positions)
     case = json.dumps({"dt": dt, "method": method, "t_end": t_end, "sun": str(sun_path), "out": str(out)})
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, __file__, "--basilisk-case", case], check=True, cwd=folder)
-    return time.perf_counter() - t0, np.load(out)
+    wall = _process([sys.executable, __file__, "--basilisk-case", case], cwd=folder, env=child_env())
+    return wall, np.load(out)
 
 
 # --- accuracy
@@ -305,7 +325,7 @@ def main(argv=None):
     # times over the day
     import orbatt  # noqa: F401  (the kernels warm before timing)
 
-    inproc, setup, proc, share, same = {}, {}, {}, {}, {}
+    inproc, setup, proc, cpu, share, same = {}, {}, {}, {}, {}, {}
     rtols = sorted({p[2][0] for p in picks if p[2] is not None}, reverse=True)
     with tempfile.TemporaryDirectory() as tmp:
         if rtols:
@@ -315,50 +335,57 @@ def main(argv=None):
             inproc[rtol] = median_time(lambda: _timed(orbatt_propagate, case, t_out, rtol), repeats)
             setup[rtol] = median_time(lambda: _timed(be.orbatt_case, DAY, TERMS), repeats)
             runs = [orbatt_process(scenario_toml(rtol), tmp) for _ in range(repeats)]
-            proc[rtol] = statistics.median(r[0] for r in runs)
-            share[rtol] = statistics.median(r[2]["wall_time_s"] / r[0] for r in runs)
+            proc[rtol] = statistics.median(r[0][0] for r in runs)
+            cpu[rtol] = statistics.median(r[0][1] for r in runs)
+            share[rtol] = statistics.median(r[2]["wall_time_s"] / r[0][0] for r in runs)
             same[rtol] = be._angle(runs[0][1], orbatt_propagate(case, t_out, rtol)[0])
         rows_b = {(r[0], r[1]) for p in picks for r in p[3]}
         for method, dt in sorted(rows_b):
             runs = [basilisk_in_process(t_out, dt, method, sun_table) for _ in range(repeats)]
             inproc[method, dt] = statistics.median(r[1]["execute"] for r in runs)
             setup[method, dt] = statistics.median(r[1]["setup"] for r in runs)
+            basilisk_process(dt, method, tmp, sun_table)   # discarded: file caches warm, as orbatt's
             pruns = [basilisk_process(dt, method, tmp, sun_table) for _ in range(repeats)]
-            proc[method, dt] = statistics.median(r[0] for r in pruns)
+            proc[method, dt] = statistics.median(r[0][0] for r in pruns)
+            cpu[method, dt] = statistics.median(r[0][1] for r in pruns)
             same[method, dt] = be._angle(pruns[0][1], runs[0][0])
             share[method, dt] = inproc[method, dt] / proc[method, dt]
             same[method, dt, "day"] = be._angle(runs[0][0], qref)
-        imports = {name: median_time(lambda: _timed(subprocess.run, [sys.executable, "-c", code], check=True), repeats)
+        imports = {name: median_time(lambda: _process([sys.executable, "-c", code],
+                                                        env=child_env())[0], repeats)
                    for name, code in IMPORTS.items() if basilisk or name == "orbatt"}
 
     print(f"\n### The day ({DAY:.0f} s): times (median of {repeats}) and ratios (Basilisk's fastest row reaching "
           f"the target over the span / the row)\n")
     print("| target (rad) | over | model | setting | error over the span (rad) | error over the day (rad) | "
           "steps (rejected) | RHS evaluations | set-up (s) | in-process (s) | ratio | whole process (s) | ratio | "
-          "integration share of the process |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "its CPU (s) | ratio | integration share of the process |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for target, name, mine, theirs, best in picks:
         over = "one orbit" if name == "orbit" else f"{span / 3600:.1f} h"
         keys = [(r[0], r[1]) for r in theirs]
         b_in = min((inproc[k] for k in keys), default=None)
         b_pr = min((proc[k] for k in keys), default=None)
+        b_cpu = min((cpu[k] for k in keys), default=None)
         if mine is None:
-            print(f"| {target:g} | {over} | orbatt | no rtol of the grid reaches it | | | | | | | | | | |")
+            print(f"| {target:g} | {over} | orbatt | no rtol of the grid reaches it |" + " |" * 12)
         else:
             rtol, err, st = mine
             print(f"| {target:g} | {over} | **orbatt** | dop853 rtol {rtol:.1e} | {err[name]:.2g} | {err['day']:.2g} | "
                   f"{st['steps']} ({st['rejected_steps']}) | {st['rhs_evaluations']} | {setup[rtol]:.3f} | "
                   f"{inproc[rtol]:.4f} | {_fmt(b_in and b_in / inproc[rtol], '.0f')} | {proc[rtol]:.2f} | "
-                  f"{_fmt(b_pr and b_pr / proc[rtol], '.1f')} | {share[rtol]:.0%} |")
+                  f"{_fmt(b_pr and b_pr / proc[rtol], '.1f')} | {cpu[rtol]:.2f} | "
+                  f"{_fmt(b_cpu and b_cpu / cpu[rtol], '.1f')} | {share[rtol]:.0%} |")
         for method, dt, err, _ in theirs:
             key = (method, dt)
             print(f"| {target:g} | {over} | Basilisk | {method.upper()} task step {dt:g} s | {err[name]:.2g} | "
                   f"{same[method, dt, 'day']:.2g} | {int(round(DAY / dt))} | {int(round(DAY / dt)) * STAGES[method]} | "
                   f"{setup[key]:.3f} | {inproc[key]:.2f} | {b_in / inproc[key]:.2f} | {proc[key]:.2f} | "
-                  f"{b_pr / proc[key]:.2f} | {share[key]:.0%} |")
+                  f"{b_pr / proc[key]:.2f} | {cpu[key]:.2f} | {b_cpu / cpu[key]:.2f} | {share[key]:.0%} |")
         if not theirs and best is not None:
             method, dt, err, _ = best
             print(f"| {target:g} | {over} | Basilisk | cannot reach it: best of the search {method.upper()} "
-                  f"{dt:g} s | {err[name]:.2g} | | | | | | | | | |")
+                  f"{dt:g} s | {err[name]:.2g} |" + " |" * 11)
     print("\n- orbatt run's file against orbatt.propagate at the same rtol (largest angle): "
           + ", ".join(f"rtol {r:.1e} {same[r]:.1g}" for r in rtols))
     if rows_b:
