@@ -1,6 +1,6 @@
 """The day-long 3U CubeSat against Basilisk 2.12, in-process and as whole processes (issue 25).
 
-Run from a checkout: ``python benchmarks/basilisk_day.py`` (about 5 min on 2 cores, most of it
+Run from a checkout: ``python benchmarks/basilisk_day.py`` (about 3-4 min on 2 cores, much of it
 the classical reference over the day and Basilisk; ``--quick``: fewer repeats and the classical
 reference over 6 h only). Basilisk (``pip install bsk``) is optional: without it only orbatt's
 rows are printed.
