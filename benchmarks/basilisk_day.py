@@ -22,7 +22,8 @@ tolerance searches: the loosest orbatt rtol of a grid (4 per decade, as ``benchm
 ``search_tolerance``) and the largest Basilisk task step of a list (RKF78 with its default
 tolerances, one step per task step; RK4) whose error meets the target.
 
-Times (median of ``--repeats``), all over the whole day:
+Times (median of ``--repeats``; orbatt's in-process times, milliseconds, of at least 21), all
+over the whole day:
 
 * in-process: ``orbatt.propagate`` (kernels warm, the case's tables sampled; the set-up,
   :func:`orbatt_setup`, separately) against Basilisk's ``ExecuteSimulation()`` (its set-up, the simulation
@@ -344,8 +345,9 @@ def main(argv=None):
             orbatt_process(scenario_toml(rtols[0]), tmp, warm=True)
         for rtol in rtols:
             orbatt_propagate(case, t_out, rtol)
-            inproc[rtol] = median_time(lambda: _timed(orbatt_propagate, case, t_out, rtol), repeats)
-            setup[rtol] = median_time(lambda: _timed(orbatt_setup, t_out, rtol), repeats)
+            # milliseconds: more repeats, so that a preemption on a loaded machine does not set the median
+            inproc[rtol] = median_time(lambda: _timed(orbatt_propagate, case, t_out, rtol), max(repeats, 21))
+            setup[rtol] = median_time(lambda: _timed(orbatt_setup, t_out, rtol), max(repeats, 21))
             runs = [orbatt_process(scenario_toml(rtol), tmp) for _ in range(repeats)]
             proc[rtol] = statistics.median(r[0][0] for r in runs)
             cpu[rtol] = statistics.median(r[0][1] for r in runs)
