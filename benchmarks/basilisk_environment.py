@@ -44,9 +44,9 @@ import sys
 import time
 
 import numpy as np
-from astropy import units as u
-from scipy.integrate import solve_ivp
-from scipy.interpolate import CubicSpline
+
+# astropy and scipy are imported where used: benchmarks/basilisk_day.py times a fresh process
+# that imports this module to build Basilisk's simulation, and that process needs numpy only
 
 EPOCH = "2024-03-20T00:00:00Z"
 GM = 398600.4418e9                  # m^3/s^2 (orbatt's KeplerOrbit is given the same value)
@@ -157,8 +157,10 @@ def reference_torques(t, q, sun):
 
 def sun_spline(t_end):
     """Geocentric GCRS Sun (m) from astropy's built-in ephemeris, splined over [-600, t_end + 600] s."""
+    from astropy import units as u
     from astropy.coordinates import GCRS, get_body, solar_system_ephemeris
     from astropy.time import Time
+    from scipy.interpolate import CubicSpline
 
     ts = np.arange(-600.0, t_end + 1200.0, 600.0)
     times = Time(EPOCH) + ts * u.s
@@ -171,6 +173,8 @@ def classical_run(t_out, terms, sun=None, hold=None, rtol=1e-12):
     """Quaternions ``(len(t_out), 4)`` of the classical model with the ``terms`` (a subset of
     ``{"gravity_gradient", "drag", "srp"}``). ``hold``: hold the density and the Sun constant over
     steps of ``hold`` s (density at the step's start, the Sun at its midpoint), as Basilisk does."""
+    from scipy.integrate import solve_ivp
+
     t_out = np.asarray(t_out, dtype=float)
 
     def rhs(t, y, rho_held=None, sun_held=None):
@@ -208,6 +212,8 @@ def classical_run(t_out, terms, sun=None, hold=None, rtol=1e-12):
 # --- orbatt
 def orbatt_case(t_end, terms):
     """``(body, state0, potential)`` of the case in orbatt with the ``terms``."""
+    from astropy import units as u
+
     import orbatt
     from orbatt.environment import ExponentialAtmosphere
     from orbatt.torques import EnvironmentTorques, Facet
@@ -234,10 +240,13 @@ def orbatt_run(t_out, terms, rtol=1e-12):
 
 
 # --- Basilisk
-def basilisk_sim(terms, dt, state=None, sun=None, tol=None):
-    """A Basilisk simulation of the case with the ``terms``, task step ``dt`` (s), RKF78.
-    ``state``: ``(t, q, omega)`` to start from instead of the initial state (r, v from Kepler at t).
-    Returns ``(sim, spacecraft, effectors dict, sun message, recorder)``."""
+def basilisk_sim(terms, dt, state=None, sun=None, tol=None, method="rkf78", record_dt=None):
+    """A Basilisk simulation of the case with the ``terms``, task step ``dt`` (s), RKF78
+    (``method="rk4"``: Basilisk's RK4, one step per task step). ``state``: ``(t, q, omega)`` to
+    start from instead of the initial state (r, v from Kepler at t); ``sun``: a callable of the
+    time (s) giving the Sun's position (m). ``record_dt``: the state recorder's sampling interval
+    (s; default every task step). Returns ``(sim, spacecraft, effectors dict, sun message,
+    recorder)``."""
     from Basilisk.architecture import messaging
     from Basilisk.simulation import (GravityGradientEffector, exponentialAtmosphere, facetDragDynamicEffector,
                                      facetSRPDynamicEffector, spacecraft, svIntegrators)
@@ -260,7 +269,7 @@ def basilisk_sim(terms, dt, state=None, sun=None, tol=None):
     sc.hub.v_CN_NInit = v0.reshape(3, 1).tolist()
     sc.hub.sigma_BNInit = np.reshape(RigidBodyKinematics.EP2MRP(q0), (3, 1)).tolist()
     sc.hub.omega_BN_BInit = np.reshape(w0, (3, 1)).tolist()
-    integrator = svIntegrators.svIntegratorRKF78(sc)
+    integrator = (svIntegrators.svIntegratorRK4 if method == "rk4" else svIntegrators.svIntegratorRKF78)(sc)
     if tol is not None:   # adaptive within each task step; default (relTol 1e-4): one step per task step
         integrator.relTol, integrator.absTol = tol, tol * 1e-3
     sc.setIntegrator(integrator)
@@ -296,7 +305,7 @@ def basilisk_sim(terms, dt, state=None, sun=None, tol=None):
     for model, priority in models:
         sim.AddModelToTask("task", model, priority)
     sim.AddModelToTask("task", sc, 50)
-    rec = sc.scStateOutMsg.recorder()
+    rec = sc.scStateOutMsg.recorder() if record_dt is None else sc.scStateOutMsg.recorder(round(record_dt * 1e9))
     sim.AddModelToTask("task", rec, 10)
     if sun_msg is not None:
         write_sun(sun_msg, sun(t0))
@@ -312,33 +321,45 @@ def write_sun(msg, position):
     msg.write(payload)
 
 
-def basilisk_run(t_out, terms, dt, sun=None, tol=None):
+def basilisk_run(t_out, terms, dt, sun=None, tol=None, method="rkf78", sun_every=None, timings=None):
     """Quaternions ``(N, 4)`` of Basilisk at ``t_out`` (multiples of ``dt``), and the time spent in
-    ``ExecuteSimulation`` (s). With SRP the Sun message is rewritten before every task step with
-    astropy's Sun at the step's midpoint."""
+    ``ExecuteSimulation`` (s). With SRP the Sun message is rewritten with ``sun`` at the midpoint
+    of every ``sun_every`` s (a multiple of ``dt``; default ``dt``: before every task step).
+    ``method``: ``"rkf78"`` or ``"rk4"``. ``timings``: a dict that receives ``"setup"`` (s: the
+    simulation built and initialized) and ``"execute"``; with ``t_out`` evenly spaced by a multiple
+    of ``dt`` from 0 the state is recorded at ``t_out`` only."""
     from Basilisk.utilities import RigidBodyKinematics
 
-    sim, sc, eff, sun_msg, rec = basilisk_sim(terms, dt, sun=sun, tol=tol)
-    sim.InitializeSimulation()
-    n = int(round(t_out[-1] / dt))
+    t_out = np.asarray(t_out, dtype=float)
     dt_ns = round(dt * 1e9)
+    n = int(round(t_out[-1] / dt))
+    spacing = np.diff(t_out)
+    record_dt = (float(spacing[0]) if len(t_out) > 1 and t_out[0] == 0.0 and np.allclose(spacing, spacing[0])
+                 and abs(spacing[0] / dt - round(spacing[0] / dt)) < 1e-9 else None)
+    t0 = time.perf_counter()
+    sim, sc, eff, sun_msg, rec = basilisk_sim(terms, dt, sun=sun, tol=tol, method=method, record_dt=record_dt)
+    sim.InitializeSimulation()
     t1 = time.perf_counter()
     if sun_msg is None:
         sim.ConfigureStopTime(n * dt_ns)
         sim.ExecuteSimulation()
     else:
+        every = max(1, int(round((dt if sun_every is None else sun_every) / dt)))
         sim.ConfigureStopTime(0)
         sim.ExecuteSimulation()
-        for k in range(n):
-            write_sun(sun_msg, sun((k + 0.5) * dt))
-            sim.ConfigureStopTime((k + 1) * dt_ns)
+        for k in range(0, n, every):
+            m = min(every, n - k)
+            write_sun(sun_msg, sun((k + 0.5 * m) * dt))
+            sim.ConfigureStopTime((k + m) * dt_ns)
             sim.ExecuteSimulation()
-    wall = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    if timings is not None:
+        timings.update(setup=t1 - t0, execute=t2 - t1)
     times = rec.times() * 1e-9
     sigma = rec.sigma_BN
-    idx = [int(np.argmin(np.abs(times - t))) for t in t_out]
+    idx = np.clip(np.searchsorted(times, t_out - 0.5 * dt), 0, len(times) - 1)
     q = np.array([RigidBodyKinematics.MRP2EP(sigma[i]) for i in idx])
-    return q * np.sign(q[:, :1]), wall
+    return q * np.sign(q[:, :1]), t2 - t1
 
 
 def basilisk_torques(t, q, w, terms, sun=None):
