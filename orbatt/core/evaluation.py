@@ -107,8 +107,8 @@ def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
             u_sum = 0.0
             g_sum = (0.0, 0.0, 0.0, 0.0)
             for j in range(nt):
-                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3], consts[i, j, 4], consts[i, j, 5],
-                     consts[i, j, 6], consts[i, j, 7])
+                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3], consts[i, j, 4],
+                     consts[i, j, 5], consts[i, j, 6], consts[i, j, 7])
                 u, g = term_value(kinds[j], starts[j], c, qi, inertia_t, params)
                 if j == 0:  # as terms_at: the sum starts from the first term's value
                     u_sum = u

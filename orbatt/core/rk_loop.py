@@ -46,8 +46,9 @@ from .model import next_breakpoint
 from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
 from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES, ST_FACOLD, ST_H, ST_HMIN,
-                           ST_SWITCH_K, ST_SWITCH_T, ST_T, TABLEAUS, accept_step, all_finite, begin_attempt, controller, controller9, error_norm, hinit_der2,
-                           hinit_guess, hinit_norms, hinit_refine, momentum_scale, reject_nonfinite, reject_step)
+                           ST_SWITCH_K, ST_SWITCH_T, ST_T, TABLEAUS, accept_step, all_finite, begin_attempt, controller,
+                           controller9, error_norm, hinit_der2, hinit_guess, hinit_norms, hinit_refine, momentum_scale,
+                           reject_nonfinite, reject_step)
 from .switches import AT_START, crossed, locate, switch_count, switch_values, update
 
 __all__ = ["loop_of", "stage_input"]
