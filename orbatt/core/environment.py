@@ -76,13 +76,18 @@ def shadow_conical(r_sat, r_sun, R_body, R_sun):
     dz = r_sun[2] - r_sat[2]
     d = math.sqrt(dx * dx + dy * dy + dz * dz)
     rs = math.sqrt(r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2])
+    dot = -(r_sat[0] * dx + r_sat[1] * dy + r_sat[2] * dz)
+    if dot <= 0.0 and R_body < 0.99 * rs and R_sun < 0.1 * d:
+        # the Sun at 90 deg or more from the body's centre (c >= pi/2) while the two apparent
+        # radii add up to less than asin(0.99) + asin(0.1) < pi/2: fully lit, the answer of the
+        # full test below, without its asin and atan2 (the sunlit half of a low orbit)
+        return 1.0
     a = math.asin(min(R_sun / d, 1.0))      # apparent radius of the Sun
     b = math.asin(min(R_body / rs, 1.0))    # apparent radius of the body
     # apparent separation of the centres: angle between -r_sat and r_sun - r_sat
     cx = -(r_sat[1] * dz - r_sat[2] * dy)
     cy = -(r_sat[2] * dx - r_sat[0] * dz)
     cz = -(r_sat[0] * dy - r_sat[1] * dx)
-    dot = -(r_sat[0] * dx + r_sat[1] * dy + r_sat[2] * dz)
     c = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot)
     if c >= a + b:
         return 1.0
