@@ -47,7 +47,8 @@ gravity gradient) over one orbit, as an ensemble of N members (random attitudes,
 deg/s rms) through ``orbatt.propagate`` with a batch ``State``, against the same members under
 the gravity gradient alone on the same orbit, at the scenario's tolerances (rtol 1e-10, atol
 1e-12); ``dop853`` (members independent) and ``dop853-lanes``. Printed beside the
-throughput: steps and right-hand sides per member, ns per right-hand side, and the time to
+throughput: the error of the first members' final attitudes against a tight run of the same
+model (rtol 3e-15), steps and right-hand sides per member, ns per right-hand side, and the time to
 sample the environment along the orbit (building the tables, once per orbit, shared by the
 members) with its largest items (cProfile).
 """
@@ -660,6 +661,10 @@ def env_scenarios(folder):
     return out
 
 
+#: members whose final attitude is compared with a tight run (table B's error column)
+ERROR_MEMBERS = 8
+
+
 def part_b(n_members, repeats):
     """Measure and print part B, the environment-torque ensemble against the gravity gradient.
 
@@ -676,6 +681,7 @@ def part_b(n_members, repeats):
     from orbatt import quaternion as qt
     from orbatt.scenario import load_scenario
     from orbatt.scenario.build import build_potential
+    from run import angle
 
     folder = Path(tempfile.mkdtemp(prefix="orbatt-env-"))
     variants = [(label, load_scenario(path)) for label, path in env_scenarios(folder)]
@@ -701,42 +707,48 @@ def part_b(n_members, repeats):
     prof.enable()
     build_potential(sc.spec, sc.orbit, t_end).kernel_model()
     prof.disable()
+    refs = {}   # the final attitudes of the first ERROR_MEMBERS members from a tight run, per model
+    for label, pot, _ in models:
+        refs[label] = orbatt.propagate(sc.body, states[:ERROR_MEMBERS], pot, [0.0, t_end], rtol=3e-15,
+                                       atol=1e-18).q[:, -1]
     rows = []
     for method in ("dop853", "dop853-lanes"):
         chosen = models if method == "dop853" else [models[0], models[-1]]
-        loops, last, errors = {}, {}, {}
+        loops, last, errors, refused = {}, {}, {}, {}
         for label, pot, _ in chosen:   # compile, or learn that the method refuses the model
             try:
                 orbatt.propagate(sc.body, states, pot, [0.0, t_end], method=method, rtol=rtol, atol=atol)
                 loops[label] = []
             except Exception as exc:  # noqa: BLE001 - a method that refuses the model: say so
-                errors[label] = str(exc).splitlines()[0]
+                refused[label] = str(exc).splitlines()[0]
         for _ in range(repeats if method == "dop853" else min(repeats, 2)):   # alternate the models
             for label, pot, _ in chosen:
                 if label in loops:
                     tr = orbatt.propagate(sc.body, states, pot, [0.0, t_end], method=method, rtol=rtol, atol=atol)
                     loops[label].append(tr.stats["wall_time_s"])
                     last[label] = tr.stats
+                    errors[label] = max(angle(tr.q[e, -1], refs[label][e]) for e in range(ERROR_MEMBERS))
         for label, _, samp in chosen:
-            rows.append((method, label, (stats(loops[label]), last[label]) if label in loops else None,
-                         errors.get(label), samp))
+            rows.append((method, label, (stats(loops[label]), last[label], errors[label]) if label in loops else None,
+                         refused.get(label), samp))
     orbits = t_end / sc.orbit.period_value
     print(f"{'method':<13} {'model':<38} {'loop best':>9} {'median':>9} {'body-orbits/s':>13} {'vs GG':>7} "
-          f"{'steps/m':>8} {'RHS/m':>7} {'ns/RHS':>7} {'tables':>7}")
+          f"{'steps/m':>8} {'RHS/m':>7} {'ns/RHS':>7} {'error':>8} {'tables':>7}")
     base = {}
     for method, label, res, err, samp in rows:
         if res is None:
             print(f"{method:<13} {label:<38} refused: {err}")
             continue
-        (lb, lm), st = res
+        (lb, lm), st, error = res
         rate = n_members * orbits / lb
         base.setdefault(method, rate)
         print(f"{method:<13} {label:<38} {lb * 1e3:7.1f}ms {lm * 1e3:7.1f}ms {rate:13.0f} {rate / base[method]:6.3f}x "
               f"{st['steps'] / n_members:8.0f} {st['rhs_evaluations'] / n_members:7.0f} "
-              f"{lb / st['rhs_evaluations'] * 1e9:7.0f} {samp:6.2f}s")
+              f"{lb / st['rhs_evaluations'] * 1e9:7.0f} {error:8.1e} {samp:6.2f}s")
     print("(loop = the compiled ensemble call, Trajectory.stats['wall_time_s']; steps and RHS per member, "
-          "dop853-lanes counts every lane of a group; tables = sampling the environment along the orbit, "
-          "build_potential + kernel_model, once per orbit for all members)")
+          "dop853-lanes counts every lane of a group; error = the largest angle (rad) between the final attitude "
+          f"and a tight run's (rtol 3e-15) over the first {ERROR_MEMBERS} members; tables = sampling the environment "
+          "along the orbit, build_potential + kernel_model, once per orbit for all members)")
     print("\nSampling the full environment, largest items (cProfile, cumulative):")
     s = io.StringIO()
     pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(14)

@@ -28,7 +28,7 @@ from .core.kinds import BY_NAME
 from .environment import sun as esun
 from .environment.atmosphere import PiecewiseExponentialAtmosphere
 from .environment.tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES,
-                                  TABLE_MARGIN, sample_pieces, tabulate)
+                                  TABLE_MARGIN, tabulate_along_orbit)
 from .control import BDotControl, PDControl
 from .errors import InputError
 from .orbits.base import OrbitProvider
@@ -292,36 +292,45 @@ class EnvironmentTorques(Potential):
         self._field_tables = {}  # the piece tables of field_table: density, sun, field
 
     # --- the kernel model
-    def _samples(self, pieces):
-        """Samples at the nodes of ``pieces`` (:func:`~orbatt.environment.tables.sample_pieces`)
-        over the run and a margin of :data:`~orbatt.environment.tables.TABLE_MARGIN` on each
-        side, cut to the span of a sampled orbit (:func:`sample_margin` says how far to sample
-        one, e.g. a TLE, to keep it whole)."""
+    def _tabulate(self, pieces, evaluate, breaks=False):
+        """The piece table (:func:`~orbatt.environment.tables.tabulate_along_orbit`) of
+        ``evaluate`` over the run and a margin of :data:`~orbatt.environment.tables.TABLE_MARGIN`
+        on each side, cut to the span of a sampled orbit (:func:`sample_margin` says how far to
+        sample one, e.g. a TLE, to keep it whole); ``breaks``: knots at the UTC midnights
+        (a model with daily inputs: NRLMSIS)."""
         t0, t1 = self.span
         valid = self.orbit.time_span
         lo, hi = t0 - TABLE_MARGIN, t1 + TABLE_MARGIN
         if valid is not None:
             lo, hi = max(lo, valid[0]), min(hi, valid[1])
-        return sample_pieces(self.orbit, lo * u.s, hi * u.s, pieces)
+        cuts = ()
+        epoch = self.orbit.epoch
+        if breaks and epoch is not None:
+            from astropy.time import Time
+
+            day0 = math.floor((epoch + lo * u.s).utc.mjd)
+            days = Time(np.arange(day0 + 1, math.floor((epoch + hi * u.s).utc.mjd) + 1), format="mjd", scale="utc")
+            cuts = (days - epoch).to_value(u.s) if days.size else ()
+        return tabulate_along_orbit(self.orbit, lo, hi, pieces, evaluate, cuts)
 
     def field_table(self, name):
         """The piece table (:mod:`orbatt.core.environment`) of an environment field along the
-        orbit, sampled over the run and its margin (:meth:`_samples`) once and kept: ``"density"``
-        (kg km^-3, of ``atmosphere``), ``"sun"`` (the Sun's position, km, inertial) or
-        ``"field"`` (``B`` in T, inertial, of ``magnetic_field``), with the pieces of
-        :mod:`orbatt.environment.tables`. The terms' rows (:mod:`orbatt.terms`) and the control
-        laws' (:mod:`orbatt.control`) read them."""
+        orbit, sampled over the run and its margin (:meth:`_tabulate`) once and kept:
+        ``"density"`` (kg km^-3, of ``atmosphere``; knots at the UTC midnights, where NRLMSIS's
+        day of the year changes: a jump of 2.6e-3 at 400 km), ``"sun"`` (the Sun's position,
+        km, inertial) or ``"field"`` (``B`` in T, inertial, of ``magnetic_field``), with the
+        pieces of :mod:`orbatt.environment.tables`. The terms' rows (:mod:`orbatt.terms`) and
+        the control laws' (:mod:`orbatt.control`) read them."""
         if name not in self._field_tables:
             if name == "density":
                 layered = isinstance(self.atmosphere, PiecewiseExponentialAtmosphere)
                 pieces = LAYERED_DENSITY_PIECES if layered else DENSITY_PIECES
-                tab = tabulate(self._samples(pieces), self.atmosphere.density, pieces.degree) * 1.0
+                tab = self._tabulate(pieces, self.atmosphere.density, breaks=True)
                 tab[:, PIECE_HEADER:] *= 1e9  # kg m^-3 -> kg km^-3 (the coefficients; not the header)
             elif name == "sun":
-                tab = tabulate(self._samples(SUN_PIECES), lambda t, r: esun.sun_position(t), SUN_PIECES.degree)
+                tab = self._tabulate(SUN_PIECES, lambda t, r: esun.sun_position(t))
             elif name == "field":
-                tab = tabulate(self._samples(MAGNETIC_FIELD_PIECES), self.magnetic_field.field,
-                               MAGNETIC_FIELD_PIECES.degree)
+                tab = self._tabulate(MAGNETIC_FIELD_PIECES, self.magnetic_field.field)
             else:
                 raise ValueError(f"field_table: unknown field {name!r}; one of 'density', 'sun', 'field'")
             self._field_tables[name] = tab

@@ -44,7 +44,7 @@ from .. import units as U
 from ..errors import InputError
 
 __all__ = ["OrbitSamples", "Pieces", "sample_along_orbit", "sample_pieces", "piece_times", "piece_table",
-           "tabulate", "MAGNETIC_FIELD_PIECES", "SUN_PIECES", "DENSITY_PIECES", "LAYERED_DENSITY_PIECES",
+           "tabulate", "tabulate_along_orbit", "BREAK_LEAD", "MAGNETIC_FIELD_PIECES", "SUN_PIECES", "DENSITY_PIECES", "LAYERED_DENSITY_PIECES",
            "TABLE_MARGIN"]
 
 
@@ -64,6 +64,9 @@ SUN_PIECES = Pieces(21600.0, 5)
 DENSITY_PIECES = Pieces(600.0, 12)
 #: a layered density's table (piecewise exponential: jumps at the layers' bases)
 LAYERED_DENSITY_PIECES = Pieces(30.0, 3)
+#: how long (s) before a break (:func:`tabulate_along_orbit`) the piece ending there samples
+#: its end value
+BREAK_LEAD = 1e-3
 #: the tables reach this far (s) beyond each end of the run (a stage at the run's end,
 #: rounded past it, stays inside)
 TABLE_MARGIN = 60.0
@@ -176,6 +179,44 @@ def sample_pieces(orbit, t0, t1, pieces):
     """
     t0, t1 = _checked_span(orbit, t0, t1)
     return _samples_at(orbit, piece_times(t0, t1, pieces))
+
+
+def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=()):
+    """The piece table of a field along ``orbit`` on ``[t0, t1]``, with knots at ``breaks``.
+
+    Parameters
+    ----------
+    orbit : orbatt.orbits.OrbitProvider
+        As for :func:`sample_along_orbit`.
+    t0, t1 : float
+        The span (s since the orbit's epoch), ``t0 < t1``; inside ``orbit.time_span``.
+    pieces : Pieces
+        The pieces and their degree.
+    evaluate : callable
+        As for :func:`tabulate`.
+    breaks : sequence of float
+        Times (s) where the field jumps (NRLMSIS at each UTC midnight: its day of the year is
+        an integer input). The span is cut there and each part into its own pieces; the piece
+        ending at a break is sampled at its end :data:`BREAK_LEAD` before it (the field's value
+        just before the jump), so no piece straddles the jump (a polynomial through one would
+        ring across the piece). Breaks outside ``(t0, t1)`` are ignored.
+
+    Returns
+    -------
+    ndarray
+        The :func:`piece_table` of the whole span (the parts' rows, in order).
+    """
+    t0, t1 = _checked_span(orbit, t0, t1)
+    edges = [t0, *sorted(float(b) for b in breaks if t0 < b < t1), t1]
+    parts = []
+    for k in range(len(edges) - 1):
+        t = piece_times(edges[k], edges[k + 1], pieces)
+        at = t.copy()
+        if k < len(edges) - 2:
+            at[-1] = edges[k + 1] - min(BREAK_LEAD, 0.01 * (edges[k + 1] - edges[k]))
+        s = _samples_at(orbit, at)
+        parts.append(piece_table(t, evaluate(s.time, s.position), pieces.degree))
+    return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])
 
 
 def _chebyshev_to_monomial(degree):

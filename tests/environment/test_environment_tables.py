@@ -239,3 +239,37 @@ def test_layered_density_table_error():
     1.3e-5 along this orbit (the 30 s cubic spline before: 1.9e-5 on the same points)."""
     err = _table_error(PiecewiseExponentialAtmosphere().density, tables.LAYERED_DENSITY_PIECES, 11200.0)
     assert err < 1.9e-5
+
+
+def test_breaks_cut_the_pieces_where_the_field_jumps():
+    """A field with a jump: with the jump as a break no piece straddles it, the piece ending
+    there takes the value just before it, and the table is the smooth field on both sides."""
+    smooth = lambda t: np.sin(t / 300.0)  # noqa: E731
+    field = lambda time, r: smooth((time - EPOCH).to_value(u.s)) + ((time - EPOCH).to_value(u.s) >= 1000.0)  # noqa: E731
+    pieces = tables.Pieces(600.0, 12)
+    table = tables.tabulate_along_orbit(ORBIT, 0.0, 2500.0, pieces, field, breaks=[1000.0, -5.0, 3000.0])
+    assert 1000.0 in table[:, 0] and table[0, 0] == 0.0 and table[-1, 0] == 2500.0
+    x = np.concatenate([np.linspace(0.0, 2500.0, 1001), [999.0, 999.9, 1000.0, 1000.1]])
+    want = smooth(x) + (x >= 1000.0)
+    # (the end value before the break is the field BREAK_LEAD earlier: off by f' 1e-3 s ~ 3e-6 here)
+    np.testing.assert_allclose(ke.piece_eval_many(table, x, 1)[:, 0], want, rtol=0, atol=5e-6)
+    plain = tables.tabulate_along_orbit(ORBIT, 0.0, 2500.0, pieces, field)
+    assert np.abs(ke.piece_eval_many(plain, x, 1)[:, 0] - want).max() > 0.05      # it rings without the break
+
+
+def test_nrlmsis_density_across_midnight():
+    """NRLMSIS's density jumps at each UTC midnight (its day of the year, 2.6e-3 at 400 km): the
+    density table has a knot there and holds the library's values on both sides."""
+    from orbatt.torques import EnvironmentTorques, Facet
+
+    epoch = Time("2024-03-19T23:50:00", scale="utc")
+    orbit = KeplerOrbit(6778.137 * u.km, 0.0005, 51.6 * u.deg, 30 * u.deg, 0 * u.deg, epoch=epoch)
+    atm = NRLMSIS(150.0, 150.0, 4.0)
+    env = EnvironmentTorques(orbit, 1200.0 * u.s, facets=[Facet(0.01 * u.m**2, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0] * u.m)],
+                             drag=True, atmosphere=atm)
+    table = env.field_table("density")
+    assert 600.0 in table[:, 0]                                          # midnight, 600 s after the epoch
+    x = np.concatenate([np.linspace(0.0, 1200.0, 241), [599.0, 599.5, 600.0, 600.5, 601.0]])
+    got = ke.piece_eval_many(table, x, 1)[:, 0] * 1e-9
+    ref = atm.density(epoch + x * u.s, orbit.state(x)[0])
+    assert np.abs(got / ref - 1.0).max() < 5e-5
