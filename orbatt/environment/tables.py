@@ -64,8 +64,8 @@ SUN_PIECES = Pieces(21600.0, 5)
 DENSITY_PIECES = Pieces(600.0, 12)
 #: a layered density's table (piecewise exponential: jumps at the layers' bases)
 LAYERED_DENSITY_PIECES = Pieces(30.0, 3)
-#: how long (s) before a break (:func:`tabulate_along_orbit`) the piece ending there samples
-#: its end value
+#: how long (s) before and after a break (:func:`tabulate_along_orbit`) the pieces ending and
+#: starting there sample their end values
 BREAK_LEAD = 1e-3
 #: the tables reach this far (s) beyond each end of the run (a stage at the run's end,
 #: rounded past it, stays inside)
@@ -196,10 +196,11 @@ def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=()):
         As for :func:`tabulate`.
     breaks : sequence of float
         Times (s) where the field jumps (NRLMSIS at each UTC midnight: its day of the year is
-        an integer input). The span is cut there and each part into its own pieces; the piece
-        ending at a break is sampled at its end :data:`BREAK_LEAD` before it (the field's value
-        just before the jump), so no piece straddles the jump (a polynomial through one would
-        ring across the piece). Breaks outside ``(t0, t1)`` are ignored.
+        an integer input). The span is cut there and each part into its own pieces; the pieces
+        ending and starting at a break are sampled there :data:`BREAK_LEAD` before and after it
+        (the field's values either side of the jump, whatever the rounding of the time), so no
+        piece straddles the jump (a polynomial through one would ring across the piece).
+        Breaks outside ``(t0, t1)`` are ignored.
 
     Returns
     -------
@@ -212,8 +213,11 @@ def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=()):
     for k in range(len(edges) - 1):
         t = piece_times(edges[k], edges[k + 1], pieces)
         at = t.copy()
+        lead = min(BREAK_LEAD, 0.01 * (edges[k + 1] - edges[k]))
+        if k > 0:
+            at[0] = edges[k] + lead
         if k < len(edges) - 2:
-            at[-1] = edges[k + 1] - min(BREAK_LEAD, 0.01 * (edges[k + 1] - edges[k]))
+            at[-1] = edges[k + 1] - lead
         s = _samples_at(orbit, at)
         parts.append(piece_table(t, evaluate(s.time, s.position), pieces.degree))
     return np.concatenate([p[:-1] for p in parts[:-1]] + [parts[-1]])

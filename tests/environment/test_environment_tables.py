@@ -249,7 +249,8 @@ def test_breaks_cut_the_pieces_where_the_field_jumps():
     pieces = tables.Pieces(600.0, 12)
     table = tables.tabulate_along_orbit(ORBIT, 0.0, 2500.0, pieces, field, breaks=[1000.0, -5.0, 3000.0])
     assert 1000.0 in table[:, 0] and table[0, 0] == 0.0 and table[-1, 0] == 2500.0
-    x = np.concatenate([np.linspace(0.0, 2500.0, 1001), [999.0, 999.9, 1000.0, 1000.1]])
+    x = np.concatenate([np.linspace(0.0, 2500.0, 1001), [999.0, 999.9, 1000.1]])
+    x = x[x != 1000.0]                  # (at the knot itself, either side's value)
     want = smooth(x) + (x >= 1000.0)
     # (the end value before the break is the field BREAK_LEAD earlier: off by f' 1e-3 s ~ 3e-6 here)
     np.testing.assert_allclose(ke.piece_eval_many(table, x, 1)[:, 0], want, rtol=0, atol=5e-6)
@@ -268,7 +269,7 @@ def test_nrlmsis_density_across_midnight():
     env = EnvironmentTorques(orbit, 1200.0 * u.s, facets=[Facet(0.01 * u.m**2, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0] * u.m)],
                              drag=True, atmosphere=atm)
     table = env.field_table("density")
-    assert 600.0 in table[:, 0]                                          # midnight, 600 s after the epoch
+    assert np.isclose(table[:, 0], 600.0, rtol=0, atol=1e-6).sum() == 1      # midnight, 600 s after the epoch
     x = np.concatenate([np.linspace(0.0, 1200.0, 241), [599.0, 599.5, 600.0, 600.5, 601.0]])
     got = ke.piece_eval_many(table, x, 1)[:, 0] * 1e-9
     ref = atm.density(epoch + x * u.s, orbit.state(x)[0])
