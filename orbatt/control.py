@@ -9,11 +9,11 @@
   the Sun, made by an ideal actuator or by the wheels.
 * :class:`BDotControl`: B-dot detumbling with magnetorquers.
 
-A control law rides with :class:`orbatt.EnvironmentTorques` (``control=``), which holds the
-orbit and samples the fields the law reads (the Sun, the magnetic field,
-:meth:`~orbatt.EnvironmentTorques.field_table`); the law gives its own model row
-(``model_row``), which :func:`orbatt.model_assembly.assemble` packs after the potential's terms
-and the wheels' row. Rate-dependent laws
+A control law is a peer of the potential: ``orbatt.propagate(..., control=law)`` (or carried
+by :class:`orbatt.EnvironmentTorques`, ``control=``, which samples the fields the law reads:
+the Sun, the magnetic field, :meth:`~orbatt.EnvironmentTorques.field_table`); the law gives its
+own model row (``model_row``), which :func:`orbatt.model_assembly.assemble` packs after the
+potential's terms and the wheels' row. Rate-dependent laws
 need an adaptive method (``dop853`` or scipy's); wheels too (their state is integrated).
 """
 from __future__ import annotations
@@ -236,6 +236,11 @@ class PDControl:
                 "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
                 "target_axis": None if self.target_axis is None else self.target_axis.tolist()}
 
+    @property
+    def reads_orbit(self):
+        """Whether the law reads the orbit: the orbital frame or the Sun as its target."""
+        return self.target != "inertial"
+
     def model_row(self, wheels, tables):
         """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
         gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
@@ -292,6 +297,9 @@ class BDotControl:
     def settings(self):
         """The plain settings that :func:`control_law` makes this law of again."""
         return {"law": self.law, "gain": self.gain, "max_dipole": self.max_dipole}
+
+    #: B-dot reads the magnetic field along the orbit
+    reads_orbit = True
 
     def model_row(self, wheels, tables):
         """The law's model row (:meth:`row`; ``wheels`` unused); ``tables(name)`` gives the

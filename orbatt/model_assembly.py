@@ -11,6 +11,12 @@ for :class:`~orbatt.EnvironmentTorques`, the terms of :mod:`orbatt.terms`; unpac
 :class:`~orbatt.PDControl`, :class:`~orbatt.BDotControl`, reading the fields the potential
 sampled along the orbit, :meth:`~orbatt.EnvironmentTorques.field_table`);
 :func:`orbatt.core.model.build` packs them once, in that order.
+
+The control law is a peer of the potential: ``propagate(..., control=law)`` hands it to
+:func:`assemble` beside the potential (:func:`control_of` resolves it against the older
+spelling, a law carried by ``EnvironmentTorques(control=)``). The law reads the orbit of the
+potential's row 0 and, where it needs a field along the orbit (the Sun for ``target = "sun"``,
+the magnetic field for B-dot), the potential's samples of it.
 """
 from __future__ import annotations
 
@@ -18,11 +24,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .control import wheels_row
+from .control import LAWS, wheels_row
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["KernelSpec", "assemble", "model_rows"]
+__all__ = ["KernelSpec", "assemble", "control_of", "model_rows"]
 
 
 class KernelSpec(NamedTuple):
@@ -61,10 +67,49 @@ def _potential_model(potential):
         raise InputError(f"potential: {exc}") from None
 
 
-def assemble(potential, bodies) -> KernelSpec:
+def control_of(potential, control=None):
+    """The control law of a run: ``control`` (given beside the potential) or the one the
+    potential carries (``EnvironmentTorques(control=)``), or None.
+
+    Raises
+    ------
+    InputError
+        ``control`` is not a control law (:data:`orbatt.control.LAWS`), or both the argument
+        and the potential hold one.
+    """
+    carried = getattr(potential, "control", None)
+    if control is None:
+        return carried
+    if not isinstance(control, tuple(LAWS.values())):
+        raise InputError(f"control: expected one of {', '.join(c.__name__ for c in LAWS.values())}, got "
+                         f"{type(control).__name__}")
+    if carried is not None and carried is not control:
+        raise InputError(f"control: the potential already carries a control law ({carried!r}); give the law once, "
+                         "either as propagate(..., control=law) or as EnvironmentTorques(..., control=law)")
+    return control
+
+
+def _field_tables(potential, control):
+    """``tables(name)`` for ``control.model_row``: the potential's samples of a field along
+    the orbit (:meth:`orbatt.EnvironmentTorques.field_table`); a potential that samples none
+    is refused naming what the law reads."""
+    tables = getattr(potential, "field_table", None)
+    if tables is not None:
+        return tables
+    what = {"sun": "the Sun's position", "field": "the magnetic field"}
+
+    def refuse(name):
+        raise InputError(f"control: {control!r} reads {what.get(name, name)} along the orbit, which "
+                         f"{type(potential).__name__} does not sample; give the potential as orbatt.EnvironmentTorques("
+                         "orbit, t_end, ...) with the field it needs (magnetic_field=..., or an epoch for the Sun)")
+    return refuse
+
+
+def assemble(potential, bodies, control=None) -> KernelSpec:
     """The :class:`KernelSpec` of a run: ``potential``'s orbit and terms, then the wheels of
-    ``bodies`` (the members share them) and the control law the potential carries
-    (``potential.control``), after the potential's ``check_body`` (if any) accepted every body.
+    ``bodies`` (the members share them) and the control law (``control``, or the one the
+    potential carries: :func:`control_of`), after the potential's ``check_body`` (if any)
+    accepted every body.
 
     Parameters
     ----------
@@ -72,6 +117,9 @@ def assemble(potential, bodies) -> KernelSpec:
         An orbatt potential (:mod:`orbatt.potentials`, :class:`orbatt.EnvironmentTorques`).
     bodies : list of RigidBody
         The members (:func:`orbatt.methods.problem.bodies_of`).
+    control : PDControl or BDotControl, optional
+        The control law, a peer of the potential: it reads the potential's orbit (row 0) and
+        the fields the potential samples along it.
 
     Returns
     -------
@@ -86,12 +134,17 @@ def assemble(potential, bodies) -> KernelSpec:
         for b in set(bodies):
             potential.check_body(b)
     wheels = bodies[0].wheels
-    control = getattr(potential, "control", None)
+    control = control_of(potential, control)
     if not wheels and control is None:
         return KernelSpec(*_potential_model(potential))
     orbit_row, rows = model_rows(_potential_model(potential))
     if wheels:
         rows.append(wheels_row(wheels))
     if control is not None:
-        rows.append(control.model_row(wheels, potential.field_table))
+        row = control.model_row(wheels, _field_tables(potential, control))
+        if control.reads_orbit and orbit_row[0] == km.ORBIT_NONE:
+            raise InputError(f"control: {control!r} reads the orbit (its target or its field), and "
+                             f"{type(potential).__name__} has none; give a potential with an orbit (a gravity gradient, "
+                             "orbatt.EnvironmentTorques(orbit, t_end, ...))")
+        rows.append(row)
     return KernelSpec(*km.build(orbit=orbit_row, terms=rows))

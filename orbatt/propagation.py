@@ -31,6 +31,7 @@ import numpy as np
 
 from .core import INTERPRETED
 from .errors import InputError, IntegrationError
+from .model_assembly import control_of
 from .methods import METHODS, Method, methods, register
 from .methods.base import resolve_method
 from .methods.problem import (DEFAULT_MAX_STEPS, MIN_RTOL, Problem, bodies_of, check_extended, initial_states,
@@ -47,7 +48,7 @@ CHUNK_SECONDS = 0.25
 
 
 def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", rtol=1e-10, atol=1e-12,
-              step=None, progress=None, max_steps=None, **options) -> Trajectory:
+              step=None, progress=None, max_steps=None, control=None, **options) -> Trajectory:
     """Propagate the attitude ``(q, Q)`` of a rigid body (or an ensemble) under a potential.
 
     Parameters
@@ -85,6 +86,13 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
         (the result is then marked incomplete). Off by default.
     max_steps : int
         Limit on step attempts per member (default 1e8).
+    control : PDControl or BDotControl, optional
+        A control law in the loop, beside the potential (:mod:`orbatt.control`): it reads the
+        potential's orbit (a PD law's orbital target) and the fields the potential samples along
+        it (the Sun for ``target = "sun"``, the magnetic field for B-dot:
+        :class:`orbatt.EnvironmentTorques` with ``magnetic_field=``). An inertial PD target
+        needs no orbit (``TorqueFree()`` will do). The law may instead ride with the potential
+        (``EnvironmentTorques(control=)``), not both. Needs an adaptive method.
     **options
         Method options (``max_step`` for adaptive methods, ``independent_variable`` for
         ``"dop853"`` and ``"dop853-lanes"``, ``kinetic`` for splitting).
@@ -110,7 +118,8 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     bodies, body_ensemble = bodies_of(body)
     y0, inertia, state_ensemble = initial_states(state0, bodies)
     ensemble = body_ensemble or state_ensemble
-    kernel = kernel_spec(potential, bodies)
+    control = control_of(potential, control)
+    kernel = kernel_spec(potential, bodies, control)
     check_extended(cls, kernel)
     t0, t_end, tv = time_span(t, t_span, bodies[0], potential)
     rtol, atol, stepv, max_steps = method_settings(cls, rtol, atol, step, max_steps, bodies[0])
@@ -130,7 +139,7 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
             stats["stopped"] = reason
         if not ensemble:
             Y = Y[0]
-        return Trajectory(body=bodies[0], potential=potential, t=np.array(tt, dtype=np.float64),
+        return Trajectory(body=bodies[0], potential=potential, control=control, t=np.array(tt, dtype=np.float64),
                           q=np.ascontiguousarray(Y[..., :4]), Q=np.ascontiguousarray(Y[..., 4:8]),
                           wheel_momenta=np.ascontiguousarray(Y[..., 8:]) if Y.shape[-1] > 8 else None,
                           inertia=inertia if body_ensemble else inertia[0].copy(), method=m.name,

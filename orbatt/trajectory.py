@@ -37,6 +37,9 @@ class Trajectory:
         computed.
     wheel_momenta : ndarray (N, n) or (E, N, n), or None
         The reaction wheels' axial momenta ``h`` (kg km^2/s) of a body with wheels.
+    control : PDControl or BDotControl, or None
+        The control law in the loop (given to :func:`orbatt.propagate` beside the potential,
+        or carried by it: :func:`orbatt.model_assembly.control_of`).
     """
 
     body: RigidBody
@@ -50,6 +53,11 @@ class Trajectory:
     stats: dict = field(default_factory=dict)
     complete: bool = True
     wheel_momenta: np.ndarray = None
+    control: object = None
+
+    def __post_init__(self):
+        if self.control is None:  # a law the potential carries (EnvironmentTorques(control=))
+            self.control = getattr(self.potential, "control", None)
 
     @property
     def orbit(self):

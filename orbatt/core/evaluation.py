@@ -11,7 +11,7 @@ import numpy as np
 
 from . import potentials as pot
 from ._jit import jit
-from .model import gradient, orbit_radial, term_constants, term_value
+from .model import N_CONSTANTS, gradient, orbit_radial, term_constants, term_value
 
 __all__ = ["gradient_called", "evaluate_terms", "evaluate_many", "evaluate_members"]
 
@@ -90,7 +90,7 @@ def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
         return U, tau
     kinds = np.empty(nt, dtype=np.int64)
     starts = np.empty(nt, dtype=np.int64)
-    consts = np.empty((n, nt, 4))
+    consts = np.empty((n, nt, N_CONSTANTS))
     work = np.full(pot.WORK_SIZE, np.nan)
     for i in range(n):
         r, xhat, v = orbit_radial(t[i], terms, params, table, work)
@@ -98,7 +98,7 @@ def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
             kind, p0, c = term_constants(j + 1, t[i], terms, params, table, work, r, xhat, v)
             kinds[j] = kind
             starts[j] = p0
-            for k in range(4):
+            for k in range(N_CONSTANTS):
                 consts[i, j, k] = c[k]
     for e in range(n_members):
         inertia_t = (inertia[e, 0], inertia[e, 1], inertia[e, 2])
@@ -107,7 +107,8 @@ def evaluate_members(t, q, inertia, terms, params, table, per_term, want_tau):
             u_sum = 0.0
             g_sum = (0.0, 0.0, 0.0, 0.0)
             for j in range(nt):
-                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3])
+                c = (consts[i, j, 0], consts[i, j, 1], consts[i, j, 2], consts[i, j, 3], consts[i, j, 4], consts[i, j, 5],
+                     consts[i, j, 6], consts[i, j, 7])
                 u, g = term_value(kinds[j], starts[j], c, qi, inertia_t, params)
                 if j == 0:  # as terms_at: the sum starts from the first term's value
                     u_sum = u

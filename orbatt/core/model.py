@@ -119,6 +119,12 @@ DENSITY_TABLE, DENSITY_EXPONENTIAL = 0, 1
 SRP_HEADER = 6
 #: shadow models of the SRP term
 SHADOW_NONE, SHADOW_CYLINDRICAL, SHADOW_CONICAL = 0, 1, 2
+#: how many constants a term row may take per evaluation (:func:`term_constants`: the
+#: tuple ``c``, computed once per evaluation and shared by every member): the one place that
+#: sets the width. The kinds of today use at most 4 (the padding costs nothing: the tuples are
+#: inlined into the step loops and LLVM drops the unused entries); a kind that needs more than
+#: :data:`N_CONSTANTS` widens it here and in :func:`constants_of`.
+N_CONSTANTS = 8
 
 
 # ---------------------------------------------------------------------------------------
@@ -237,23 +243,30 @@ def _srp_constants(sun, params, p0, r, xhat):
 
 
 @jit_inline
+def constants_of(c0, c1, c2, c3):
+    """The constants tuple (:data:`N_CONSTANTS` entries) of a term that uses the first four."""
+    return (c0, c1, c2, c3, 0.0, 0.0, 0.0, 0.0)
+
+
+@jit_inline
 def term_constants(j, t, terms, params, table, work, r, xhat, v):
-    """``(kind, p0, c)``: the kind of term row ``j``, the start of its parameters and the four
-    constants it needs at time ``t`` (read once per evaluation, outside any loop over
-    members): gravity gradient ``(GM / r^3, xhat)``, heavy top ``(s Mg, x_c)``, drag
-    ``(1/2 rho |v|^2, v^)``, SRP ``(P, s^)``, magnetic ``B`` (inertial). The environment
-    fields come from the term's piece table (:func:`orbatt.core.environment.piece_eval`),
-    an exponential atmosphere's density from its formula at ``r``."""
+    """``(kind, p0, c)``: the kind of term row ``j``, the start of its parameters and the
+    constants ``c`` (a tuple of :data:`N_CONSTANTS`) it needs at time ``t`` (read once per
+    evaluation, outside any loop over members): gravity gradient ``(GM / r^3, xhat)``, heavy
+    top ``(s Mg, x_c)``, drag ``(1/2 rho |v|^2, v^)``, SRP ``(P, s^)``, magnetic ``B``
+    (inertial); the rest zero. The environment fields come from the term's piece table
+    (:func:`orbatt.core.environment.piece_eval`), an exponential atmosphere's density from
+    its formula at ``r``."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
     if kind == GRAVITY_GRADIENT:
-        return kind, p0, (params[p0] / (r * r * r), xhat[0], xhat[1], xhat[2])
+        return kind, p0, constants_of(params[p0] / (r * r * r), xhat[0], xhat[1], xhat[2])
     elif kind == HEAVY_TOP:
-        return kind, p0, (params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
+        return kind, p0, constants_of(params[p0], params[p0 + 1], params[p0 + 2], params[p0 + 3])
     elif kind == DRAG or kind == SRP or kind == MAGNETIC:
         return kind, p0, _environment_constants(kind, t, table[terms[j, R0]:terms[j, R1]], terms[j, FLAGS], work,
                                                 params, p0, r, xhat, v)
-    return kind, p0, (0.0, 0.0, 0.0, 0.0)
+    return kind, p0, constants_of(0.0, 0.0, 0.0, 0.0)
 
 
 @jit
@@ -266,11 +279,13 @@ def _environment_constants(kind, t, tab, slot, work, params, p0, r, xhat, v):
             rho = params[p0 + 3] * math.exp(-((r - params[p0 + 6]) - params[p0 + 4]) / params[p0 + 5])
         else:
             rho = env.piece_eval(tab, t, 1, slot, work)[0]
-        return _drag_constants(rho, params, p0, r, xhat, v)
+        c = _drag_constants(rho, params, p0, r, xhat, v)
     elif kind == SRP:
-        return _srp_constants(env.piece_eval(tab, t, 3, slot, work), params, p0, r, xhat)
-    b = env.piece_eval(tab, t, 3, slot, work)
-    return (b[0], b[1], b[2], 0.0)
+        c = _srp_constants(env.piece_eval(tab, t, 3, slot, work), params, p0, r, xhat)
+    else:
+        b = env.piece_eval(tab, t, 3, slot, work)
+        c = (b[0], b[1], b[2], 0.0)
+    return constants_of(c[0], c[1], c[2], c[3])
 
 
 @jit_inline
@@ -281,7 +296,7 @@ def term_value(kind, p0, c, q, inertia, params):
     if kind == GRAVITY_GRADIENT:
         return pot.gravity_gradient(q, inertia, c[0], (c[1], c[2], c[3]))
     elif kind == HEAVY_TOP:
-        return pot.heavy_top(q, c)
+        return pot.heavy_top(q, (c[0], c[1], c[2], c[3]))
     elif kind == DRAG or kind == SRP or kind == MAGNETIC or kind == CONSTANT_TORQUE:
         return 0.0, _environment_gradient(kind, c, q, params, p0)
     return 0.0, (0.0, 0.0, 0.0, 0.0)

@@ -483,7 +483,10 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     data.update(extra)
     coords.update(wheel_coordinates(body, U))
 
-    attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=tr.potential,
+    pot_desc = _describe(tr.potential)
+    if tr.control is not None and "control" not in pot_desc:  # a law given beside the potential
+        pot_desc = {**pot_desc, "control": tr.control.describe()}
+    attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=pot_desc,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title)
     if not dimless:  # the Dataset boundary: the attitude family from kernel units to SI

@@ -34,7 +34,7 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
     Parameters
     ----------
     trajectory : Trajectory
-        Its ``potential`` may hold a ``control`` law; ``wheel_momenta`` the wheels' state.
+        Its ``control`` law (if any) and ``wheel_momenta`` (the wheels' state).
     body : RigidBody
         The body (its ``wheels``).
     inertia : ndarray (3,) or (E, 3)
@@ -56,7 +56,7 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
         the body), ``wheel_torque`` (N m, motor) with a ``wheel`` dimension; with a control law
         ``torque_control`` (N m, body axes) and, for B-dot, ``dipole_control`` (A m^2).
     """
-    control = getattr(trajectory.potential, "control", None)
+    control = trajectory.control
     wheels = body.wheels
     if control is None and not wheels:
         return {}
@@ -70,7 +70,7 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
     Qs = Q.reshape(members, -1, 4)
     hs = (np.zeros(qs.shape[:2] + (0,)) if h is None else np.asarray(h, dtype=np.float64).reshape(members, -1, n))
     I = np.broadcast_to(np.asarray(inertia, dtype=np.float64), (members, 3))
-    model = kernel_spec(trajectory.potential, [body])
+    model = kernel_spec(trajectory.potential, [body], control)
     out = {k: [] for k in ("omega", "hvec", "tau", "m", "u")}
     for e in range(members):
         Y = np.ascontiguousarray(np.concatenate([qs[e], Qs[e], hs[e]], axis=1))

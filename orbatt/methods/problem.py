@@ -146,11 +146,12 @@ def initial_states(state0, bodies):
     return y0, inertia, state_ensemble
 
 
-def kernel_spec(potential, bodies) -> KernelSpec:
-    """The :class:`KernelSpec` of ``potential`` acting on ``bodies``: the one assembler,
+def kernel_spec(potential, bodies, control=None) -> KernelSpec:
+    """The :class:`KernelSpec` of ``potential`` acting on ``bodies`` under the control law
+    ``control`` (or the one the potential carries): the one assembler,
     :func:`orbatt.model_assembly.assemble` (the potential's orbit and terms, the wheels, the
     control law)."""
-    return assemble(potential, bodies)
+    return assemble(potential, bodies, control)
 
 
 def check_extended(cls, kernel):
