@@ -133,7 +133,7 @@ def sample_along_orbit(orbit, t0, t1, step):
     return _samples_at(orbit, np.linspace(t0, t1, n + 1))
 
 
-def piece_times(t0, t1, pieces):
+def piece_times(t0, t1, pieces, knots=()):
     """The sampling times of a piece table on ``[t0, t1]``.
 
     Parameters
@@ -141,21 +141,29 @@ def piece_times(t0, t1, pieces):
     t0, t1 : float
         The span (s), ``t0 < t1``.
     pieces : Pieces
-        ``ceil((t1 - t0) / length)`` equal pieces, ``degree + 1`` nodes each.
+        Each gap between ``t0``, the ``knots`` and ``t1`` is cut into
+        ``ceil(gap / length)`` equal pieces, ``degree + 1`` nodes each.
+    knots : sequence of float
+        Times (s) that must be knots of the table (a sampled orbit's samples: the orbit
+        itself is a polynomial between them, C2 across); those outside ``(t0, t1)`` are
+        ignored.
 
     Returns
     -------
     ndarray (n degree + 1,)
-        The Chebyshev-Lobatto nodes ``t_i + (1 - cos(pi j / degree)) h / 2`` of every piece,
+        The Chebyshev-Lobatto nodes ``t_i + (1 - cos(pi j / degree)) h_i / 2`` of every piece,
         increasing; piece ``i`` owns ``t[i degree : (i + 1) degree + 1]`` (adjacent pieces
-        share their end node, the knot, which is exactly ``t0 + i h``).
+        share their end node, the knot).
     """
     length, degree = float(pieces.length), int(pieces.degree)
     if not (t1 > t0 and length > 0.0 and degree >= 1):
         raise InputError(f"pieces: need t1 > t0, a positive length and a degree >= 1, got t0 = {t0}, t1 = {t1}, "
                          f"{pieces}")
-    n = max(int(math.ceil((t1 - t0) / length - 1e-9)), 1)
-    edges = np.linspace(t0, t1, n + 1)
+    cuts = np.unique(np.concatenate([[t0], np.asarray(knots, dtype=np.float64).ravel(), [t1]]))
+    cuts = cuts[(cuts >= t0) & (cuts <= t1)]
+    parts = [np.linspace(a, b, max(int(math.ceil((b - a) / length - 1e-9)), 1) + 1)[:-1]
+             for a, b in zip(cuts[:-1], cuts[1:])]
+    edges = np.concatenate([*parts, [t1]])
     x = 0.5 * (1.0 - np.cos(np.pi * np.arange(degree) / degree))  # in [0, 1), the end node belongs to the next
     t = edges[:-1, None] + x[None, :] * np.diff(edges)[:, None]
     return np.concatenate([t.ravel(), edges[-1:]])
@@ -181,7 +189,7 @@ def sample_pieces(orbit, t0, t1, pieces):
     return _samples_at(orbit, piece_times(t0, t1, pieces))
 
 
-def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=()):
+def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=(), knots=()):
     """The piece table of a field along ``orbit`` on ``[t0, t1]``, with knots at ``breaks``.
 
     Parameters
@@ -201,6 +209,9 @@ def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=()):
         (the field's values either side of the jump, whatever the rounding of the time), so no
         piece straddles the jump (a polynomial through one would ring across the piece).
         Breaks outside ``(t0, t1)`` are ignored.
+    knots : sequence of float
+        Times (s) where the field is continuous but the orbit's interpolant is not smooth (a
+        sampled orbit's samples): knots of the table too (:func:`piece_times`).
 
     Returns
     -------
@@ -211,7 +222,7 @@ def tabulate_along_orbit(orbit, t0, t1, pieces, evaluate, breaks=()):
     edges = [t0, *sorted(float(b) for b in breaks if t0 < b < t1), t1]
     parts = []
     for k in range(len(edges) - 1):
-        t = piece_times(edges[k], edges[k + 1], pieces)
+        t = piece_times(edges[k], edges[k + 1], pieces, knots)
         at = t.copy()
         lead = min(BREAK_LEAD, 0.01 * (edges[k + 1] - edges[k]))
         if k > 0:
