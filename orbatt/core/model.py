@@ -309,7 +309,10 @@ def _environment_gradient(kind, c, q, params, p0):
     if kind == DRAG:
         tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 1]))
     elif kind == SRP:
-        tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
+        if c[0] == 0.0:     # the umbra: no pressure (the facets' sum would be exactly 0 too)
+            tau = (0.0, 0.0, 0.0)
+        else:
+            tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
     elif kind == CONSTANT_TORQUE:
         tau = (params[p0], params[p0 + 1], params[p0 + 2])
     else:

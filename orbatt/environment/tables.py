@@ -11,6 +11,10 @@ by the interpolation error, and the step loops land on the knots
 (:func:`orbatt.core.model.next_breakpoint`). Long pieces of high degree keep the knots rare
 (a few per orbit; the cubic splines of 20-30 s before them put a knot, hence a step, every
 20-30 s: issue 23) at a better accuracy than those splines.
+Along a sampled orbit (TLE, REBOUND: quintic Hermite pieces between its samples, C2 across)
+the field is smooth only between the samples, so they are knots of the tables too (the step
+loops land on them anyway): IGRF along the TLE orbit of ``tests/test_tle_torques.py`` is then
+1.9e-14 off the library, against 5.7e-8 with 600 s pieces across the samples.
 
 Default pieces (:class:`Pieces`: the longest piece, the degree) and the interpolation error
 they give: the largest difference between the table and the library at 39 points inside
