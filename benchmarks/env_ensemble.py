@@ -27,6 +27,7 @@ import pstats
 import re
 import shutil
 import statistics
+import sys
 import tempfile
 import time
 import warnings
@@ -101,6 +102,7 @@ def part_b(n_members, repeats, cpu_time=False):
     from orbatt import quaternion as qt
     from orbatt.scenario import load_scenario
     from orbatt.scenario.build import build_potential
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from run import angle
 
     folder = Path(tempfile.mkdtemp(prefix="orbatt-env-"))

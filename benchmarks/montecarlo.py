@@ -70,7 +70,8 @@ from pathlib import Path
 
 import numpy as np
 
-from env_ensemble import part_b, stats
+sys.path.insert(0, str(Path(__file__).resolve().parent))   # the sibling scripts, whoever loads this one
+from env_ensemble import part_b, stats  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 BDOT_SCENARIO = ROOT / "scenarios" / "cubesat-detumble-montecarlo.toml"

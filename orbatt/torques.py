@@ -26,7 +26,7 @@ from .core import potentials as kp
 from .core.environment import PIECE_HEADER
 from .core.kinds import BY_NAME
 from .environment import sun as esun
-from .environment.atmosphere import PiecewiseExponentialAtmosphere
+from .environment.atmosphere import NRLMSIS, PiecewiseExponentialAtmosphere
 from .environment.tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES,
                                   TABLE_MARGIN, tabulate_along_orbit)
 from .control import BDotControl, PDControl
@@ -320,8 +320,8 @@ class EnvironmentTorques(Potential):
     def field_table(self, name):
         """The piece table (:mod:`orbatt.core.environment`) of an environment field along the
         orbit, sampled over the run and its margin (:meth:`_tabulate`) once and kept:
-        ``"density"`` (kg km^-3, of ``atmosphere``; knots at the UTC midnights, where NRLMSIS's
-        day of the year changes: a jump of 2.6e-3 at 400 km), ``"sun"`` (the Sun's position,
+        ``"density"`` (kg km^-3, of ``atmosphere``; NRLMSIS's with knots at the UTC midnights,
+        where its day of the year changes: a jump of 2.6e-3 at 400 km), ``"sun"`` (the Sun's position,
         km, inertial) or ``"field"`` (``B`` in T, inertial, of ``magnetic_field``), with the
         pieces of :mod:`orbatt.environment.tables`. The terms' rows (:mod:`orbatt.terms`) and
         the control laws' (:mod:`orbatt.control`) read them."""
@@ -329,7 +329,9 @@ class EnvironmentTorques(Potential):
             if name == "density":
                 layered = isinstance(self.atmosphere, PiecewiseExponentialAtmosphere)
                 pieces = LAYERED_DENSITY_PIECES if layered else DENSITY_PIECES
-                tab = self._tabulate(pieces, self.atmosphere.density, breaks=True)
+                # NRLMSIS reads the date (its day of the year jumps at midnight); the exponential
+                # atmospheres read none: their tables are the same with or without an epoch
+                tab = self._tabulate(pieces, self.atmosphere.density, breaks=isinstance(self.atmosphere, NRLMSIS))
                 tab[:, PIECE_HEADER:] *= 1e9  # kg m^-3 -> kg km^-3 (the coefficients; not the header)
             elif name == "sun":
                 tab = self._tabulate(SUN_PIECES, lambda t, r: esun.sun_position(t))
