@@ -14,6 +14,7 @@ import numpy as np
 
 from . import units as U
 from .body import RigidBody
+from .core import kernel_floats
 from .core import evaluation as kev
 from .core import model as km
 from .core import potentials as kp
@@ -98,15 +99,12 @@ class Potential:
         torque in body components (``(N, 3)``, energy unit = kg km^2 s^-2 = 1e6 N m for
         dimensional bodies).
         """
-        q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
-        if type(t) is np.ndarray and t.dtype == np.float64 and t.shape == q.shape[:1] and t.flags.c_contiguous:
-            # what the line below makes of such times (a run's outputs), a read-only view (one
-            # numba specialization), without np.broadcast_to's ~3 us
-            t = t.view()
-            t.flags.writeable = False
+        q = kernel_floats(np.atleast_2d(q))
+        if type(t) is np.ndarray and t.dtype == np.float64 and t.shape == q.shape[:1]:
+            t = kernel_floats(t)  # a run's outputs: as they are (np.broadcast_to costs ~3 us)
         else:
-            t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        return kev.evaluate_many(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+            t = kernel_floats(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
+        return kev.evaluate_many(t, q, kernel_floats(body.inertia_value), *self.kernel_model(), kp.new_work())
 
     def kernel_model(self):
         """The compiled model ``(terms, params, table)`` of this potential

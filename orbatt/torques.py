@@ -20,6 +20,7 @@ import numpy as np
 from astropy import units as u
 
 from . import units as U
+from .core import kernel_floats
 from .core import evaluation as kev
 from .core import model as km
 from .core import potentials as kp
@@ -381,9 +382,9 @@ class EnvironmentTorques(Potential):
     def term_torques(self, body, t, q):
         """Each term's body torque ``(N, n_terms, 3)`` (kg km^2 s^-2 = 1e6 N m) at the times ``t``
         (s) and attitudes ``q (N, 4)``."""
-        q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
-        t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        _, tau = kev.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
+        q = kernel_floats(np.atleast_2d(q))
+        t = kernel_floats(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
+        _, tau = kev.evaluate_terms(t, q, kernel_floats(body.inertia_value), *self.kernel_model(), kp.new_work())
         return tau
 
     def fields(self, t):

@@ -22,6 +22,16 @@ SHIPPED = Path(__file__).parent.parent / "scenarios"
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 
 
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``after_compile`` (checks that kernels load from numba's cache) go last: by
+    then the other tests have compiled the kernel families, and the checks load them instead of
+    compiling them a second time in their own processes, beside the tests that compile them
+    (issue 26: 136 s of a cold run's 2-core time went to such a duplicate)."""
+    late = [item for item in items if item.get_closest_marker("after_compile")]
+    if late:
+        items[:] = [item for item in items if not item.get_closest_marker("after_compile")] + late
+
+
 @pytest.fixture(scope="session")
 def load_benchmark():
     """``load(name)``: the module of the script ``benchmarks/<name>.py`` (the test is skipped

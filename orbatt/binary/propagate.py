@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core import kernel_floats
 from ..core import dop853 as kd
 from ..core import model as kmod
 from ..core import mutual_splitting as ks
@@ -224,8 +225,8 @@ def _propagate_split(system, y0, times, step, composition, impulses):
     y = np.array(y0, dtype=np.float64)
     c = system.constants(y[0:3], y[3:6] / system.reduced_mass)
     gammas = np.array(COMPOSITIONS[composition][1])
-    i2 = np.asarray(system.inertia, dtype=np.float64)
-    i1 = np.asarray(system.primary_inertia if system.rigid_primary else np.ones(3), dtype=np.float64)
+    i2 = kernel_floats(system.inertia)
+    i1 = kernel_floats(system.primary_inertia if system.rigid_primary else np.ones(3))
     out = np.empty((times.size, y.size))
     out[0] = y
     # segments: outputs up to and including each impulse's grid point, the impulse, and on

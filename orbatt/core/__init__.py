@@ -47,9 +47,24 @@ equation  what                                                function
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ._jit import INTERPRETED
 
-__all__ = ["INTERPRETED"]
+__all__ = ["INTERPRETED", "kernel_floats"]
+
+
+def kernel_floats(a):
+    """``a`` as a C-contiguous, writeable float64 array, copied only where it is not one.
+
+    Every array a compiled kernel takes from Python goes in this one form: a read-only array
+    (a body's frozen inertia, a broadcast view, xarray's values) or a strided one is another
+    numba type, for which the kernel compiles again (the evaluation kernels took 2-3
+    specializations each, 10-45 s apiece, on a cold cache)."""
+    a = np.asarray(a, dtype=np.float64)
+    if a.flags.c_contiguous and a.flags.writeable:
+        return a
+    return np.array(a, dtype=np.float64, order="C")
 
 
 def fast_paths_in_use() -> dict:

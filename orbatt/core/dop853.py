@@ -137,24 +137,27 @@ def _batch_of(extended, tableau="dop853"):
         """
         E = Y.shape[0]
         rec_t = np.empty(0)
+        # False, typed bool (not the literal False): the loops keep the one signature the
+        # Python drivers compile them for (a literal compiled each loop a second time)
+        record_all = rec_t.shape[0] > 0
         for e in nb.prange(E):
             if CNT[e, CNT_IOUT] >= t_out.shape[0]:
                 status[e] = DONE
                 continue
             if verner:
                 if extended:
-                    status[e] = advance_wide_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False,
+                    status[e] = advance_wide_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
                                                       inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
                                                       max_steps, budget)
                 else:
-                    status[e] = advance_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
-                                                 terms, params, table, WORK[e], rtol, atol, max_step, max_steps,
-                                                 budget)
+                    status[e] = advance_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
+                                                 inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
+                                                 max_steps, budget)
             elif extended:
-                status[e] = advance_wide(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
+                status[e] = advance_wide(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all, inertia[e],
                                          terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
             else:
-                status[e] = advance(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], False, inertia[e],
+                status[e] = advance(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all, inertia[e],
                                     terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
 
     return jit_parallel(advance_batch)
@@ -178,24 +181,25 @@ def _lanes_of(extended, tableau="dop853"):
         parallel over groups. ``ST, CNT, WORK, status`` have one row per group."""
         E = Y.shape[0]
         rec_t = np.empty(0)
+        record_all = rec_t.shape[0] > 0  # False, typed bool (see advance_batch)
         for gi in nb.prange((E + lanes - 1) // lanes):  # (a group that is done returns DONE at once)
             a = gi * lanes
             b = min(E, a + lanes)
             if verner:
                 if extended:
                     status[gi] = advance_group_wide_verner98(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
-                                                             False, inertia[a:b], terms, params, table, WORK[gi], rtol,
-                                                             atol, max_step, max_steps, budget)
+                                                             record_all, inertia[a:b], terms, params, table, WORK[gi],
+                                                             rtol, atol, max_step, max_steps, budget)
                 else:
                     status[gi] = advance_group_verner98(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
-                                                        False, inertia[a:b], terms, params, table, WORK[gi], rtol,
+                                                        record_all, inertia[a:b], terms, params, table, WORK[gi], rtol,
                                                         atol, max_step, max_steps, budget)
             elif extended:
-                status[gi] = advance_group_wide(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b], False,
+                status[gi] = advance_group_wide(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b], record_all,
                                                 inertia[a:b], terms, params, table, WORK[gi], rtol, atol, max_step,
                                                 max_steps, budget)
             else:
-                status[gi] = advance_group(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b], False,
+                status[gi] = advance_group(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b], record_all,
                                            inertia[a:b], terms, params, table, WORK[gi], rtol, atol, max_step,
                                            max_steps, budget)
 

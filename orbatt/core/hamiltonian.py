@@ -144,5 +144,7 @@ def kinetic(y, inertia):
 @jit
 def energy(t, y, inertia, terms, params, table, work):
     """Hamiltonian ``H = T + U(q, t)``."""
-    u, _ = gradient_called(t, (y[0], y[1], y[2], y[3]), inertia, terms, params, table, work)
+    # the inertia as a tuple, as evaluate_many passes it (one compiled gradient_called)
+    u, _ = gradient_called(t, (y[0], y[1], y[2], y[3]), (inertia[0], inertia[1], inertia[2]), terms, params, table,
+                           work)
     return kinetic(y, inertia) + u

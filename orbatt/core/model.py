@@ -408,6 +408,15 @@ def gradient_lanes(t, Y, nl, I, terms, params, table, work, G):
     return True
 
 
+@jit
+def gradient_lanes_called(t, Y, nl, I, terms, params, table, work, G):
+    """:func:`gradient_lanes`, compiled once and called (not inlined): one call serves a whole
+    group, so the call costs nothing beside the loops over the lanes, and the splitting group
+    loops (:mod:`orbatt.core.splitting`) that call it compile without a copy of every term's
+    lanes loop of their own. Pass borrowed arrays (:func:`orbatt.core._jit.borrow`)."""
+    return gradient_lanes(t, Y, nl, I, terms, params, table, work, G)
+
+
 # ---------------------------------------------------------------------------------------
 # Building models (Python)
 

@@ -60,7 +60,7 @@ import numpy as np
 from ._jit import (DONE, EPS, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, borrow, borrow_model, jit,
                    jit_inline, jit_parallel, keepalive)
 from .hamiltonian import rhs_inline, rhs_lanes
-from .model import gradient, gradient_lanes
+from .model import gradient, gradient_lanes_called
 from .qalg import qmul
 
 # ---------------------------------------------------------------------------------------
@@ -432,7 +432,7 @@ def _split_step_lanes(yg, nl, t, h, flow, weight, toff, AX, CF, I, terms, params
             gvalid = False
         elif terms.shape[0] > 1:
             if not gvalid:
-                gradient_lanes(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
+                gradient_lanes_called(t + toff[j] * h, yg, nl, I, terms, params, table, work, G)
                 nev += 1
                 gvalid = True
             for i in range(4):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import canonical as cn
+from ..core import kernel_floats
 from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
@@ -74,7 +75,7 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
     out = {k: [] for k in ("omega", "hvec", "tau", "m", "u")}
     for e in range(members):
         Y = np.ascontiguousarray(np.concatenate([qs[e], Qs[e], hs[e]], axis=1))
-        res = kg.evaluate_extended(t, Y, np.ascontiguousarray(I[e]), *model, kp.new_work())
+        res = kg.evaluate_extended(kernel_floats(t), Y, kernel_floats(I[e]), *model, kp.new_work())
         for k, v in zip(out, res):
             out[k].append(v)
     shape = (lambda a: a) if ens else (lambda a: a[0])

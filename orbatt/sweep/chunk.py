@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import canonical as cn
 from .. import quaternion as qt
+from ..core import kernel_floats
 from ..core import evaluation as kev
 from ..core import potentials as kp
 from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
@@ -232,7 +233,7 @@ def conserved_energy(spec, potential, orbit, inertia, q, Q, t):
         if not np.all(np.isfinite(q[e])):
             Upot[e] = np.nan
             continue
-        Upot[e] = kev.evaluate_many(tt, np.ascontiguousarray(q[e:e + 1]), np.ascontiguousarray(inertia[e]), *model,
+        Upot[e] = kev.evaluate_many(kernel_floats(tt), kernel_floats(q[e:e + 1]), kernel_floats(inertia[e]), *model,
                                    kp.new_work())[0][0]
     H = T + Upot
     if spec.energy == "jacobi":

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import canonical as cn
 from .. import quaternion as qt
+from ..core import kernel_floats
 from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
@@ -155,7 +156,7 @@ def study_series(potential, body, inertia, t, q, Q, h):
         return omega, z, z, np.zeros((t.size, 0))
     model = kernel_spec(potential, [body])
     Y = np.ascontiguousarray(np.concatenate([q, Q, np.zeros((t.size, 0)) if h is None else h], axis=1))
-    omega, _, tau, m, u = kg.evaluate_extended(np.ascontiguousarray(t), Y, np.ascontiguousarray(inertia), *model,
+    omega, _, tau, m, u = kg.evaluate_extended(kernel_floats(t), Y, kernel_floats(inertia), *model,
                                                kp.new_work())
     return omega, tau, m, u
 

@@ -4,6 +4,11 @@ import subprocess
 from pathlib import Path
 import sys
 
+import pytest
+
+# they check what is in the cache: run after the other tests compiled the kernels (conftest.py)
+pytestmark = pytest.mark.after_compile
+
 CODE = """
 import sys, numpy as np, orbatt
 body = orbatt.RigidBody([1.25, 1.0, 0.75])
