@@ -288,7 +288,7 @@ class BDotControl:
 
     def row(self, field_table):
         """The :data:`~orbatt.core.model.BDOT_CONTROL` row with the field along the orbit
-        (T, inertial; a spline table of :mod:`orbatt.core.environment`)."""
+        (T, inertial; a piece table of :mod:`orbatt.core.environment`)."""
         return (km.BDOT_CONTROL, [self.gain * _N_M, self.max_dipole * _N_M], field_table)
 
     def check_wheels(self, wheels):

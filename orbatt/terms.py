@@ -154,18 +154,18 @@ def _constant_row(tq):
     return (km.CONSTANT_TORQUE, tq.constant_torque * _N_M, None)
 
 
-def _spline(tabs, name, t, width):
-    return kenv.spline_eval_many(tabs[name], np.ascontiguousarray(t), width)
+def _table_values(tabs, name, t, width):
+    return kenv.piece_eval_many(tabs[name], np.ascontiguousarray(t), width)
 
 
 def _drag_fields(tq, t, pos, time, tabs):
     if "density" in tabs:
-        return {"density": _spline(tabs, "density", t, 1)[:, 0] * 1e-9}
+        return {"density": _table_values(tabs, "density", t, 1)[:, 0] * 1e-9}
     return {"density": np.asarray(tq.atmosphere.density(time, pos), dtype=np.float64)}
 
 
 def _srp_fields(tq, t, pos, time, tabs):
-    sun = _spline(tabs, "sun", t, 3) if "sun" in tabs else np.asarray(esun.sun_position(time), dtype=np.float64)
+    sun = _table_values(tabs, "sun", t, 3) if "sun" in tabs else np.asarray(esun.sun_position(time), dtype=np.float64)
     d = sun - pos
     return {"sun_direction": d / np.linalg.norm(d, axis=-1, keepdims=True),
             "shadow": (np.ones(t.shape) if tq.shadow == "none" else
@@ -174,7 +174,7 @@ def _srp_fields(tq, t, pos, time, tabs):
 
 def _magnetic_fields(tq, t, pos, time, tabs):
     if "field" in tabs:
-        return {"magnetic_field": _spline(tabs, "field", t, 3)}
+        return {"magnetic_field": _table_values(tabs, "field", t, 3)}
     return {"magnetic_field": np.asarray(tq.magnetic_field.field(time, pos), dtype=np.float64)}
 
 

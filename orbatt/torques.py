@@ -5,7 +5,7 @@ magnetic dipole, with or without the gravity gradient.
 The orbit is prescribed, so every field that depends on position and time alone - the
 atmospheric density, the geomagnetic field, the Sun's position - is evaluated before the
 integration by the models of :mod:`orbatt.environment`, at sample times along the orbit, and
-interpolated in the compiled kernel (cubic splines; the tables' errors are stated in
+interpolated in the compiled kernel (Chebyshev pieces; the tables' errors are stated in
 :mod:`orbatt.environment.tables`). The kernel terms are in :mod:`orbatt.core.model` and
 :mod:`orbatt.core.torques`.
 
@@ -24,9 +24,12 @@ from .core import kernel_floats
 from .core import evaluation as kev
 from .core import model as km
 from .core import potentials as kp
+from .core.environment import PIECE_HEADER
 from .core.kinds import BY_NAME
 from .environment import sun as esun
-from .environment.tables import DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, sample_along_orbit, tabulate
+from .environment.atmosphere import NRLMSIS, PiecewiseExponentialAtmosphere
+from .environment.tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES,
+                                  TABLE_MARGIN, tabulate_along_orbit)
 from .control import BDotControl, PDControl
 from .errors import InputError
 from .orbits.base import OrbitProvider
@@ -36,7 +39,7 @@ from .terms import TERMS
 __all__ = ["Facet", "facet", "EnvironmentTorques", "TERM_NAMES", "TERM_KEYWORDS", "FIELDS_SOURCE", "sample_margin"]
 
 #: where the Dataset's environment fields come from (its variables' ``source`` attribute)
-FIELDS_SOURCE = ("the kernel's spline tables (the integration's own samples along the orbit, "
+FIELDS_SOURCE = ("the kernel's piece tables (the integration's own samples along the orbit, "
                  "interpolated; docs/design.md §10), or the closed form the kernel evaluates (exponential atmosphere)")
 #: names of the terms, as in the Dataset variables ``torque_<name>`` (:mod:`orbatt.core.kinds`)
 TERM_NAMES = {k.code: k.name for k in BY_NAME.values()}
@@ -54,27 +57,24 @@ def _quantity(value, unit, name):
 
 def sample_margin(*, drag=False, srp=False, magnetic=False, sun=False):
     """How far (s) before the start and after the end of a run :class:`EnvironmentTorques`
-    samples the orbit: one step of the coarsest table it builds.
+    samples the orbit: :data:`~orbatt.environment.tables.TABLE_MARGIN` when it builds a table.
 
     Parameters
     ----------
     drag, srp, magnetic, sun : bool
-        The tables built: density (drag, :data:`~orbatt.environment.tables.DENSITY_STEP`),
-        Sun position (SRP or a PD law pointing at the Sun,
-        :data:`~orbatt.environment.tables.SUN_STEP`), magnetic field (a residual dipole or
-        B-dot, :data:`~orbatt.environment.tables.MAGNETIC_FIELD_STEP`).
+        The tables built: density (drag), Sun position (SRP or a PD law pointing at the Sun),
+        magnetic field (a residual dipole or B-dot); their pieces:
+        :mod:`orbatt.environment.tables`.
 
     Returns
     -------
     float
         The margin (s), 0 without tables. An orbit sampled over ``[t_start - margin, t_end +
-        margin]`` (a TLE's, which SGP4 propagates either side of its epoch) keeps the
-        tables' end intervals outside the run; a shorter one cuts the margin (still within
-        the tables' stated errors).
+        margin]`` (a TLE's, which SGP4 propagates either side of its epoch) keeps the tables
+        a little beyond the run; a shorter one cuts the margin (the pieces' interpolation
+        has no end effects).
     """
-    steps = [step for on, step in ((drag, DENSITY_STEP), (srp or sun, SUN_STEP), (magnetic, MAGNETIC_FIELD_STEP))
-             if on]
-    return max(steps, default=0.0)
+    return TABLE_MARGIN if (drag or srp or magnetic or sun) else 0.0
 
 
 #: the keywords of :class:`EnvironmentTorques` its signature names (the terms' among them)
@@ -290,38 +290,54 @@ class EnvironmentTorques(Potential):
         else:
             self.kind, self.params, self.table = orbit.kernel()
         self._fields = {}
-        self._field_tables = {}  # the spline tables of field_table: density, sun, field
+        self._field_tables = {}  # the piece tables of field_table: density, sun, field
 
     # --- the kernel model
-    def _samples(self, step):
-        """Samples every ``step`` (s) over the run and a margin of one step on each side, so
-        that the spline's end intervals (not-a-knot) lie outside the run; the margin is cut
-        to the span of a sampled orbit (:func:`sample_margin` says how far to sample one, e.g.
-        a TLE, to keep it whole). A cut margin puts the end intervals inside the run, whose
-        error the steps' stated errors already cover (:mod:`orbatt.environment.tables`
-        measures them on tables without a margin); at least 3 intervals."""
+    def _tabulate(self, pieces, evaluate, breaks=False):
+        """The piece table (:func:`~orbatt.environment.tables.tabulate_along_orbit`) of
+        ``evaluate`` over the run and a margin of :data:`~orbatt.environment.tables.TABLE_MARGIN`
+        on each side, cut to the span of a sampled orbit (:func:`sample_margin` says how far to
+        sample one, e.g. a TLE, to keep it whole); ``breaks``: knots at the UTC midnights
+        (a model with daily inputs: NRLMSIS)."""
         t0, t1 = self.span
         valid = self.orbit.time_span
-        lo, hi = t0 - step, t1 + step
+        lo, hi = t0 - TABLE_MARGIN, t1 + TABLE_MARGIN
         if valid is not None:
             lo, hi = max(lo, valid[0]), min(hi, valid[1])
-        step = min(step, (hi - lo) / 3.0)
-        return sample_along_orbit(self.orbit, lo * u.s, hi * u.s, step * u.s)
+        cuts = ()
+        epoch = self.orbit.epoch
+        if breaks and epoch is not None:
+            from astropy.time import Time
+
+            day0 = math.floor((epoch + lo * u.s).utc.mjd)
+            days = Time(np.arange(day0 + 1, math.floor((epoch + hi * u.s).utc.mjd) + 1), format="mjd", scale="utc")
+            cuts = (days - epoch).to_value(u.s) if days.size else ()
+        # a sampled orbit (TLE, REBOUND) is a quintic between its samples, C2 across: the
+        # field along it is smooth only between them, so they are the pieces' knots too (the
+        # step loops land on them anyway); 600 s pieces across them were 5.7e-8 off IGRF
+        knots = self.table[:, 0] if self.kind == kp.GRAVITY_GRADIENT_SAMPLED else ()
+        return tabulate_along_orbit(self.orbit, lo, hi, pieces, evaluate, cuts, knots)
 
     def field_table(self, name):
-        """The spline table (:mod:`orbatt.core.environment`) of an environment field along the
-        orbit, sampled over the run and its margin (:meth:`_samples`) once and kept: ``"density"``
-        (kg km^-3, of ``atmosphere``), ``"sun"`` (the Sun's position, km, inertial) or
-        ``"field"`` (``B`` in T, inertial, of ``magnetic_field``). The terms' rows
-        (:mod:`orbatt.terms`) and the control laws' (:mod:`orbatt.control`) read them."""
+        """The piece table (:mod:`orbatt.core.environment`) of an environment field along the
+        orbit, sampled over the run and its margin (:meth:`_tabulate`) once and kept:
+        ``"density"`` (kg km^-3, of ``atmosphere``; NRLMSIS's with knots at the UTC midnights,
+        where its day of the year changes: a jump of 2.6e-3 at 400 km), ``"sun"`` (the Sun's position,
+        km, inertial) or ``"field"`` (``B`` in T, inertial, of ``magnetic_field``), with the
+        pieces of :mod:`orbatt.environment.tables`. The terms' rows (:mod:`orbatt.terms`) and
+        the control laws' (:mod:`orbatt.control`) read them."""
         if name not in self._field_tables:
             if name == "density":
-                tab = tabulate(self._samples(DENSITY_STEP), self.atmosphere.density) * 1.0
-                tab[:, 1:] *= 1e9  # kg m^-3 -> kg km^-3 (the time column stays)
+                layered = isinstance(self.atmosphere, PiecewiseExponentialAtmosphere)
+                pieces = LAYERED_DENSITY_PIECES if layered else DENSITY_PIECES
+                # NRLMSIS reads the date (its day of the year jumps at midnight); the exponential
+                # atmospheres read none: their tables are the same with or without an epoch
+                tab = self._tabulate(pieces, self.atmosphere.density, breaks=isinstance(self.atmosphere, NRLMSIS))
+                tab[:, PIECE_HEADER:] *= 1e9  # kg m^-3 -> kg km^-3 (the coefficients; not the header)
             elif name == "sun":
-                tab = tabulate(self._samples(SUN_STEP), lambda t, r: esun.sun_position(t))
+                tab = self._tabulate(SUN_PIECES, lambda t, r: esun.sun_position(t))
             elif name == "field":
-                tab = tabulate(self._samples(MAGNETIC_FIELD_STEP), self.magnetic_field.field)
+                tab = self._tabulate(MAGNETIC_FIELD_PIECES, self.magnetic_field.field)
             else:
                 raise ValueError(f"field_table: unknown field {name!r}; one of 'density', 'sun', 'field'")
             self._field_tables[name] = tab
@@ -375,7 +391,7 @@ class EnvironmentTorques(Potential):
         """The environment along the orbit at the times ``t`` (s): a dict of ``density``
         (kg m^-3), ``magnetic_field`` (T, inertial), ``sun_direction`` (inertial unit vector)
         and ``shadow`` (0 umbra .. 1 full Sun), those the terms use: the kernel's own tables
-        (:data:`FIELDS_SOURCE`: the splines the integration read, no second pass of the
+        (:data:`FIELDS_SOURCE`: the tables the integration read, no second pass of the
         libraries) at times inside the sampled span, the models themselves elsewhere (or
         before the model is built)."""
         t = np.asarray(t, dtype=np.float64)

@@ -111,7 +111,7 @@ def test_tle_epoch_dates_the_environment_and_the_orbit_covers_the_margin(disturb
     sc, ds = disturbed
     assert ds.attrs["epoch"].startswith(TLE_EPOCH)           # no [orbit] epoch: the TLE's
     margin = sample_margin(drag=True, srp=True, magnetic=True)
-    assert margin == 3600.0                                  # SRP's Sun table, the coarsest
+    assert margin == 60.0                                    # orbatt.environment.tables.TABLE_MARGIN
     t_end = float(ds["elapsed"].values[-1])
     assert sc.orbit.time_span == (-margin, t_end + margin)
     assert sc.potential.time_span == (0.0, t_end)
@@ -200,8 +200,8 @@ def test_bdot_on_a_tle_detumbles_with_m_cross_b(tmp_path):
     ref = np.cross(m, B)
     assert np.abs(ds["torque_control"].values - ref).max() < 1e-9 * np.abs(ref).max()   # measured 2.9e-12
     # m = -gain dB_B/dt, clipped per axis: dB_B/dt = R^T dB/dt - omega x B_B, dB/dt by a
-    # central difference of IGRF along the orbit (the kernel differentiates its 20 s spline
-    # table): measured 2.4e-8 A m^2 (unsaturated here: -gain dB_B/dt < 0.13 A m^2)
+    # central difference of IGRF along the orbit (the kernel differentiates its table, pieces
+    # between the orbit's samples): measured 2.4e-8 A m^2 (unsaturated here: -gain dB_B/dt < 0.13 A m^2)
     h = 1.0
     Bdot = (IGRFField().field(sc.orbit.epoch + (t + h) * u.s, sc.orbit.state(t + h)[0])
             - IGRFField().field(sc.orbit.epoch + (t - h) * u.s, sc.orbit.state(t - h)[0])) / (2 * h)

@@ -7,7 +7,7 @@ kg km^2 s^-1), or plain numbers for dimensionless scenarios.
 Modules: :mod:`._jit` (numba presets, intrinsics, status codes, flag names),
 :mod:`.qalg` (scalar quaternion algebra), :mod:`.kepler` and :mod:`.sampled` (orbits),
 :mod:`.potentials` (conservative terms), :mod:`.torques` (flat plates, dipole, the torque ->
-generalized force map), :mod:`.environment` (densities, shadow, spline tables),
+generalized force map), :mod:`.environment` (densities, shadow, piece tables),
 :mod:`.control` and :mod:`.gyrostat` (control laws, reaction wheels), :mod:`.model` (the term
 list and the one dispatch on kinds), :mod:`.hamiltonian` (eq. 7), :mod:`.dop853` (+
 :mod:`.rk_loop`, the one adaptive step loop, :mod:`.step_control`, its building blocks,

@@ -1,5 +1,5 @@
 """Environment kernels on plain floats: exponential densities, the shadow function and the
-cubic-spline tables of the fields sampled along the orbit (``docs/design.md`` §10).
+piece tables of the fields sampled along the orbit (``docs/design.md`` §10).
 
 Units: km for lengths, s for times, kg/m^3 for densities (the table's units for anything
 else). Vectors are 3-sequences of floats (tuples or 1-D arrays). The API counterparts, which
@@ -12,10 +12,16 @@ Parameter layouts
 * piecewise exponential: ``table = [R, h0_0, rho0_0, H_0, h0_1, rho0_1, H_1, ...]`` (km,
   kg/m^3, km), layers by increasing base altitude ``h0_k``; layer ``k`` serves
   ``h0_k <= h < h0_{k+1}`` (the first layer also below ``h0_0``, the last above).
-* spline table: ``table[i] = [t_i, c0, c1, c2, c3 (component 0), c0..c3 (component 1), ...]``,
-  shape ``(N, 1 + 4 ncomp)``; on ``[t_i, t_{i+1}]`` component ``k`` is
-  ``c0 + c1 s + c2 s^2 + c3 s^3`` with ``s = t - t_i``. The last row holds ``t_{N-1}`` and
-  the end values in ``c0`` (other coefficients 0); it is never an interval.
+* piece table (the environment fields along the orbit, :func:`piece_eval`):
+  ``table[i] = [t_i, w_i, d, a_0 .. a_d (component 0), a_0 .. a_d (component 1), ...]``,
+  shape ``(N, PIECE_HEADER + ncomp (d + 1))``; on ``[t_i, t_{i+1}]`` component ``k`` is the
+  polynomial ``sum_j a_j x^j`` of degree ``d`` in ``x = (t - t_i) w_i - 1``,
+  ``w_i = 2 / (t_{i+1} - t_i)`` (``x`` runs over ``[-1, 1]``). The last row holds ``t_{N-1}``
+  and the end values in ``a_0`` (other coefficients 0); it is never an interval.
+  :func:`orbatt.environment.tables.piece_table` builds them (Chebyshev interpolation).
+* spline table (:func:`not_a_knot_table`, the Earth-orientation nodes of
+  :mod:`orbatt.environment.frames`): ``table[i] = [t_i, c0, c1, c2, c3 (component 0), ...]``,
+  on ``[t_i, t_{i+1}]`` component ``k`` is ``c0 + c1 s + c2 s^2 + c3 s^3``, ``s = t - t_i``.
 
 Interval search (:func:`find_row`) keeps the last row used in ``work[slot]`` (NaN: none),
 as :func:`orbatt.core.sampled.find_interval` does, so consecutive nearby times cost O(1).
@@ -65,6 +71,17 @@ def shadow_conical(r_sat, r_sun, R_body, R_sun):
 
     ``r_sat``, ``r_sun``: positions relative to the occulting body's centre (km);
     ``R_body``, ``R_sun``: radii (km)."""
+    dx = r_sun[0] - r_sat[0]
+    dy = r_sun[1] - r_sat[1]
+    dz = r_sun[2] - r_sat[2]
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    rs = math.sqrt(r_sat[0] * r_sat[0] + r_sat[1] * r_sat[1] + r_sat[2] * r_sat[2])
+    dot = -(r_sat[0] * dx + r_sat[1] * dy + r_sat[2] * dz)
+    if dot <= 0.0 and R_body < 0.99 * rs and R_sun < 0.1 * d:
+        # the Sun at 90 deg or more from the body's centre (c >= pi/2) while the two apparent
+        # radii add up to less than asin(0.99) + asin(0.1) < pi/2: fully lit, the answer of the
+        # full test below, without its asin and atan2 (the sunlit half of a low orbit)
+        return 1.0
     a, b, c = conical_geometry(r_sat, r_sun, R_body, R_sun)
     if c >= a + b:
         return 1.0
@@ -183,52 +200,73 @@ def find_row(table, t, work, slot):
     return lo
 
 
-@jit_inline
-def _cubic(row, k, s):
-    b = 1 + 4 * k
-    return row[b] + s * (row[b + 1] + s * (row[b + 2] + s * row[b + 3]))
+#: columns of a piece-table row before its coefficients: ``[t_i, 2 / (t_{i+1} - t_i), degree]``
+PIECE_HEADER = 3
 
 
 @jit_inline
-def spline_eval(table, t, ncomp, slot, work):
-    """Values at ``t`` of the first ``ncomp`` (1..4) components of a spline table: a tuple of
-    4 floats, the unused ones 0. ``work[slot]`` keeps the interval (:func:`find_row`)."""
+def piece_eval(table, t, ncomp, slot, work):
+    """Values at ``t`` of the first ``ncomp`` (1..4) components of a piece table: a tuple of 4
+    floats, the unused ones 0. Each component is the polynomial ``sum a_k x^k`` (Horner) in
+    ``x = (t - t_i) 2 / (t_{i+1} - t_i) - 1`` of the row's interval. ``work[slot]`` keeps the
+    interval (:func:`find_row`)."""
     i = find_row(table, t, work, slot)
-    row = table[i]
-    s = t - row[0]
-    v0 = _cubic(row, 0, s)
-    v1 = _cubic(row, 1, s) if ncomp > 1 else 0.0
-    v2 = _cubic(row, 2, s) if ncomp > 2 else 0.0
-    v3 = _cubic(row, 3, s) if ncomp > 3 else 0.0
+    x = (t - table[i, 0]) * table[i, 1] - 1.0
+    d = int(table[i, 2])
+    b0 = PIECE_HEADER
+    b1 = b0 + d + 1
+    b2 = b1 + d + 1
+    b3 = b2 + d + 1
+    v0 = table[i, b0 + d]
+    v1 = table[i, b1 + d] if ncomp > 1 else 0.0
+    v2 = table[i, b2 + d] if ncomp > 2 else 0.0
+    v3 = table[i, b3 + d] if ncomp > 3 else 0.0
+    for k in range(d - 1, -1, -1):
+        v0 = v0 * x + table[i, b0 + k]
+        if ncomp > 1:
+            v1 = v1 * x + table[i, b1 + k]
+        if ncomp > 2:
+            v2 = v2 * x + table[i, b2 + k]
+        if ncomp > 3:
+            v3 = v3 * x + table[i, b3 + k]
     return v0, v1, v2, v3
 
 
 @jit_inline
-def spline_eval_rate(table, t, slot, work):
-    """``(value, rate)``: the first three components of a spline table at ``t`` and their time
-    derivatives (3-tuples; the derivative of each cubic, continuous across the knots).
-    ``work[slot]`` keeps the interval (:func:`find_row`)."""
+def piece_eval_rate(table, t, slot, work):
+    """``(value, rate)``: the first three components of a piece table at ``t`` and their time
+    derivatives (3-tuples; each polynomial's derivative, continuous across the knots to the
+    table's interpolation error). ``work[slot]`` keeps the interval (:func:`find_row`)."""
     i = find_row(table, t, work, slot)
-    row = table[i]
-    s = t - row[0]
-    v = (_cubic(row, 0, s), _cubic(row, 1, s), _cubic(row, 2, s))
-    d = (_cubic_rate(row, 0, s), _cubic_rate(row, 1, s), _cubic_rate(row, 2, s))
-    return v, d
-
-
-@jit_inline
-def _cubic_rate(row, k, s):
-    b = 1 + 4 * k
-    return row[b + 1] + s * (2.0 * row[b + 2] + s * 3.0 * row[b + 3])
+    w = table[i, 1]
+    x = (t - table[i, 0]) * w - 1.0
+    d = int(table[i, 2])
+    b0 = PIECE_HEADER
+    b1 = b0 + d + 1
+    b2 = b1 + d + 1
+    v0 = table[i, b0 + d]
+    v1 = table[i, b1 + d]
+    v2 = table[i, b2 + d]
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    for k in range(d - 1, -1, -1):
+        d0 = d0 * x + v0
+        d1 = d1 * x + v1
+        d2 = d2 * x + v2
+        v0 = v0 * x + table[i, b0 + k]
+        v1 = v1 * x + table[i, b1 + k]
+        v2 = v2 * x + table[i, b2 + k]
+    return (v0, v1, v2), (w * d0, w * d1, w * d2)
 
 
 @jit
-def spline_eval_many(table, t, ncomp):
-    """:func:`spline_eval` at each time of ``t`` (for outputs and tests): ``(len(t), ncomp)``."""
+def piece_eval_many(table, t, ncomp):
+    """:func:`piece_eval` at each time of ``t`` (for outputs and tests): ``(len(t), ncomp)``."""
     work = np.full(1, np.nan)
     out = np.empty((t.shape[0], ncomp))
     for j in range(t.shape[0]):
-        v = spline_eval(table, t[j], ncomp, 0, work)
+        v = piece_eval(table, t[j], ncomp, 0, work)
         for k in range(ncomp):
             out[j, k] = v[k]
     return out

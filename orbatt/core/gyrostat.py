@@ -22,7 +22,7 @@ import numpy as np
 
 from ._jit import jit, jit_inline
 from . import control as ctl
-from .environment import spline_eval, spline_eval_rate
+from .environment import piece_eval, piece_eval_rate
 from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, orbit_at, orbit_radial, terms_at
 from .qalg import qconj, qmul, qmul_pure
 from .torques import gradient_of_torque
@@ -91,7 +91,7 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
         if kind == PD_CONTROL:
             sun = (0.0, 0.0, 0.0)
             if terms[j, R1] > terms[j, R0]:
-                s4 = spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+                s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
                 sun = (s4[0], s4[1], s4[2])
             tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
             if params[p0 + 4] == ctl.ACTUATOR_WHEELS:
@@ -101,7 +101,7 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
                 app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
         elif kind == BDOT_CONTROL:
-            b_s, bdot_s = spline_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
+            b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
             m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params[p0], params[p0 + 1])
             tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
             ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])

@@ -115,7 +115,7 @@ TABLE_TERMS = codes_where("table")
 FIRST_TABLE_SLOT = 4
 #: parameters of a drag term before its facets: ``[omega, nfacets, density model, rho0, h0, H, R]``
 DRAG_HEADER = 7
-#: density models of the drag term: its table (a spline), or the exponential atmosphere in
+#: density models of the drag term: its table (pieces), or the exponential atmosphere in
 #: closed form (``rho0 exp(-(r - R - h0) / H)``, no table)
 DENSITY_TABLE, DENSITY_EXPONENTIAL = 0, 1
 #: parameters of an SRP term before its facets: ``[P1AU, AU, shadow, R_body, R_sun, nfacets]``
@@ -150,14 +150,16 @@ def next_breakpoint(s, terms, params, table):
     """The first knot after ``s`` of the model's tables, a sampled orbit's samples (row 0) and
     every term row's table (drag, SRP, magnetic, control: :mod:`orbatt.core.environment`), in
     the step loops' independent variable (:func:`orbit_at`); ``inf`` if none. Both are
-    piecewise polynomials in time (cubic splines; the orbit's quintic Hermite pieces, C2) whose
-    third derivative jumps at the knots: the step loops land on them, as on output times, so
-    that no step straddles one (an O(h^4) error the error estimate does not see) and DOP853
-    keeps its order, at the cost of a step per knot at least. Measured (``benchmarks/README.md``,
-    issue 15): a residual dipole over 20 s knots, rtol 1e-8: 1e-11 rad instead of 1.6e-5; the
-    TLE orbit of ``iss-tle-gravity-gradient``: ~5e-15 rad at any rtol instead of 1.0e-8 at
-    rtol 1e-12. The facets' shading (drag, SRP) is a kink in the attitude, not in time, and
-    stays."""
+    piecewise polynomials in time (the fields' Chebyshev pieces, whose derivatives jump at the
+    knots by the interpolation error; the orbit's quintic Hermite pieces, C2, whose third
+    derivative jumps): the step loops land on them, as on output times, so that no step
+    straddles one (an error the error estimate does not see) and DOP853 keeps its order, at the
+    cost of a step per knot at least. Measured (``benchmarks/README.md``, issue 15): a residual
+    dipole over 20 s cubic-spline knots, rtol 1e-8: 1e-11 rad instead of 1.6e-5; the TLE orbit
+    of ``iss-tle-gravity-gradient``: ~5e-15 rad at any rtol instead of 1.0e-8 at rtol 1e-12. The
+    fields' pieces span 600 s or more (:mod:`orbatt.environment.tables`), so their knots cost a
+    few steps per orbit. The facets' shading (drag, SRP) is a kink in the attitude, not in time,
+    and stays."""
     best = np.inf
     kind0 = terms[0, KIND]
     t = s
@@ -255,8 +257,8 @@ def term_constants(j, t, terms, params, table, work, r, xhat, v):
     constants ``c`` (a tuple of :data:`N_CONSTANTS`) it needs at time ``t`` (read once per
     evaluation, outside any loop over members): gravity gradient ``(GM / r^3, xhat)``, heavy
     top ``(s Mg, x_c)``, drag ``(1/2 rho |v|^2, v^)``, SRP ``(P, s^)``, magnetic ``B``
-    (inertial); the rest zero. The environment fields come from the term's spline table
-    (:func:`orbatt.core.environment.spline_eval`), an exponential atmosphere's density from
+    (inertial); the rest zero. The environment fields come from the term's piece table
+    (:func:`orbatt.core.environment.piece_eval`), an exponential atmosphere's density from
     its formula at ``r``."""
     kind = terms[j, KIND]
     p0 = terms[j, P0]
@@ -279,12 +281,12 @@ def _environment_constants(kind, t, tab, slot, work, params, p0, r, xhat, v):
         if params[p0 + 2] == DENSITY_EXPONENTIAL:
             rho = params[p0 + 3] * math.exp(-((r - params[p0 + 6]) - params[p0 + 4]) / params[p0 + 5])
         else:
-            rho = env.spline_eval(tab, t, 1, slot, work)[0]
+            rho = env.piece_eval(tab, t, 1, slot, work)[0]
         c = _drag_constants(rho, params, p0, r, xhat, v)
     elif kind == SRP:
-        c = _srp_constants(env.spline_eval(tab, t, 3, slot, work), params, p0, r, xhat)
+        c = _srp_constants(env.piece_eval(tab, t, 3, slot, work), params, p0, r, xhat)
     else:
-        b = env.spline_eval(tab, t, 3, slot, work)
+        b = env.piece_eval(tab, t, 3, slot, work)
         c = (b[0], b[1], b[2], 0.0)
     return constants_of(c[0], c[1], c[2], c[3])
 
@@ -310,7 +312,10 @@ def _environment_gradient(kind, c, q, params, p0):
     if kind == DRAG:
         tau = trq.facet_drag(q, c[0], (c[1], c[2], c[3]), params, p0 + DRAG_HEADER, int(params[p0 + 1]))
     elif kind == SRP:
-        tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
+        if c[0] == 0.0:     # the umbra: no pressure (the facets' sum would be exactly 0 too)
+            tau = (0.0, 0.0, 0.0)
+        else:
+            tau = trq.facet_srp(q, c[0], (c[1], c[2], c[3]), params, p0 + SRP_HEADER, int(params[p0 + 5]))
     elif kind == CONSTANT_TORQUE:
         tau = (params[p0], params[p0 + 1], params[p0 + 2])
     else:
@@ -469,7 +474,7 @@ def build(orbit=None, terms=()):
         optional = int(row[KIND]) == PD_CONTROL or (int(row[KIND]) == DRAG and params[row[P0] + 2] != DENSITY_TABLE)
         if (int(row[KIND]) in TABLE_TERMS and not optional) or (optional and row[R1] > row[R0]):
             if row[R1] - row[R0] < 2:
-                raise ValueError(f"term kind {int(row[KIND])} needs a spline table of at least 2 rows")
+                raise ValueError(f"term kind {int(row[KIND])} needs a table of at least 2 rows")
             if slot >= pot.WORK_SIZE:
                 raise ValueError(f"at most {pot.WORK_SIZE - FIRST_TABLE_SLOT} terms with tables")
             row[FLAGS] = slot

@@ -133,7 +133,7 @@ def shadow_edges(j, t, r, xhat, terms, params, table, work):
     shadow = params[p0 + 2]
     if shadow != SHADOW_CONICAL and shadow != SHADOW_CYLINDRICAL:
         return 0, (0.0, 0.0, 0.0)
-    sun = env.spline_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+    sun = env.piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
     rs = (r * xhat[0], r * xhat[1], r * xhat[2])
     if shadow == SHADOW_CONICAL:
         a, b, c = env.conical_geometry(rs, sun, params[p0 + 3], params[p0 + 4])

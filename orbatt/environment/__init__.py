@@ -12,11 +12,12 @@ from .atmosphere import VALLADO_TABLE, NRLMSIS, ExponentialAtmosphere, Piecewise
 from .frames import EARTH_ROTATION_RATE, R_EARTH_WGS84, geodetic, gcrs_to_itrs, itrs_to_gcrs
 from .magnetic import DipoleField, IGRFField
 from .sun import AU, R_SUN, SRP_FLUX, SPEED_OF_LIGHT, shadow, sun_position
-from .tables import (DENSITY_STEP, MAGNETIC_FIELD_STEP, SUN_STEP, OrbitSamples, sample_along_orbit,
-                     spline_table, tabulate)
+from .tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES, TABLE_MARGIN,
+                     OrbitSamples, Pieces, piece_table, piece_times, sample_along_orbit, sample_pieces, tabulate)
 
 __all__ = ["ExponentialAtmosphere", "PiecewiseExponentialAtmosphere", "NRLMSIS", "VALLADO_TABLE",
            "DipoleField", "IGRFField", "sun_position", "shadow", "SRP_FLUX", "AU", "R_SUN", "SPEED_OF_LIGHT",
            "gcrs_to_itrs", "itrs_to_gcrs", "geodetic", "EARTH_ROTATION_RATE", "R_EARTH_WGS84",
-           "OrbitSamples", "sample_along_orbit", "spline_table", "tabulate", "MAGNETIC_FIELD_STEP",
-           "SUN_STEP", "DENSITY_STEP"]
+           "OrbitSamples", "Pieces", "sample_along_orbit", "sample_pieces", "piece_times", "piece_table",
+           "tabulate", "MAGNETIC_FIELD_PIECES", "SUN_PIECES", "DENSITY_PIECES", "LAYERED_DENSITY_PIECES",
+           "TABLE_MARGIN"]

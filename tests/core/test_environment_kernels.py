@@ -77,3 +77,24 @@ def test_shadow_kernels_equal_numpy(kind):
     assert np.any(nu_np == 0.0) and np.any(nu_np == 1.0)
     if kind == "conical":
         assert np.sum((nu_np > 0.0) & (nu_np < 1.0)) > 100     # the penumbra is sampled
+
+
+def test_conical_shadow_shortcut_on_the_sunlit_side():
+    """The sunlit half (the Sun 90 deg or more from the body's centre) returns 1 without the
+    full test: the same answers as numpy's full test on a sphere of satellites, the terminator
+    plane and a satellite inside the body (where the shortcut does not apply) included."""
+    from orbatt.environment import sun
+
+    rng = np.random.default_rng(5)
+    n = 20000
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    d[: n // 4, 0] = rng.uniform(-1e-6, 1e-6, n // 4)          # near the terminator plane
+    r_sat = d * rng.choice([atm.R_EARTH_WGS84 + 400.0, atm.R_EARTH_WGS84 * 1.005, 0.5 * atm.R_EARTH_WGS84],
+                           size=n)[:, None]
+    r_sun = np.tile([sun.AU, 1e5, -2e5], (n, 1))
+    nu_np = sun.shadow(r_sat, r_sun, kind="conical")
+    nu_k = _shadow_many(r_sat, r_sun, atm.R_EARTH_WGS84, sun.R_SUN, True)
+    np.testing.assert_allclose(nu_k, nu_np, rtol=0, atol=1e-13)
+    np.testing.assert_array_equal(nu_k == 1.0, nu_np == 1.0)
+    assert np.sum(nu_np == 1.0) > n // 3 and np.any(nu_np == 0.0)

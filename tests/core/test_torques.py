@@ -13,7 +13,7 @@ from orbatt.core import model as km
 from orbatt.core import potentials as kp
 from orbatt.core import torques as trq
 from orbatt.environment.sun import shadow
-from orbatt.environment.tables import spline_table
+from orbatt.environment.tables import Pieces, piece_table, piece_times
 
 rng = np.random.default_rng(11)
 
@@ -82,10 +82,18 @@ GM = 398600.4418
 ORB = kepler.orbit_vector(6778.0, 0.001, 0.9, 0.3, 0.2, 0.1, np.sqrt(GM / 6778.0**3))
 
 
-def _orbit_samples(t0=-100.0, t1=3100.0, step=10.0):
-    t = np.arange(t0, t1 + step / 2, step)
+PIECES = Pieces(300.0, 10)
+
+
+def _orbit_samples(t0=-100.0, t1=3100.0):
+    t = piece_times(t0, t1, PIECES)
     _, _, r, pos, vel = kepler.kepler_many(t, ORB, GM)
     return t, r, pos, vel
+
+
+def _table(t, values):
+    """The piece table of ``values`` at the :func:`_orbit_samples` times."""
+    return piece_table(t, values, PIECES.degree)
 
 
 RHO0, H0, HS, REQ, WE = 3e-3, 400.0, 60.0, 6378.137, 7.2921159e-5
@@ -93,7 +101,7 @@ RHO0, H0, HS, REQ, WE = 3e-3, 400.0, 60.0, 6378.137, 7.2921159e-5
 
 def _drag_model(F):
     ts, rs, _, _ = _orbit_samples()
-    dens = spline_table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
+    dens = _table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
     return km.build(orbit=(km.ORBIT_KEPLER, ORB, None), terms=[(km.DRAG, km.drag_params(F, WE), dens)])
 
 
@@ -119,7 +127,7 @@ def test_drag_term_of_the_model():
 def test_drag_term_with_the_exponential_atmosphere_in_closed_form():
     """Issue 25: the exponential density evaluated in the kernel at the orbit's radius (no table,
     no table knots to land on): the torque of the flat-plate formulas to round-off at any time,
-    where the 30 s spline of the same density is off by ~1e-9 between its knots."""
+    where the table of the same density is off by its interpolation error between its nodes."""
     F = _facets()
     closed = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
                       terms=[(km.DRAG, km.drag_params(F, WE, (RHO0, H0, HS, REQ)), None)])
@@ -137,7 +145,7 @@ def test_drag_term_with_the_exponential_atmosphere_in_closed_form():
         ref = _drag_reference(q[i], k, vrel / np.linalg.norm(vrel), F)
         np.testing.assert_allclose(tau[i, 0], ref, rtol=1e-13, atol=1e-13 * np.linalg.norm(ref))
         np.testing.assert_allclose(tau_table[i, 0], ref, rtol=1e-8)
-    with pytest.raises(ValueError, match="needs a spline table"):     # a tabulated density needs its table
+    with pytest.raises(ValueError, match="needs a table"):     # a tabulated density needs its table
         km.build(orbit=(km.ORBIT_KEPLER, ORB, None), terms=[(km.DRAG, km.drag_params(F, WE), None)])
 
 
@@ -151,8 +159,8 @@ def test_srp_and_magnetic_terms_of_the_model():
     m = np.array([5e-3, 0.0, 2e-3])
     P1, AU, RB, RS = 4.5e-3, 1.495978707e8, 6378.137, 696000.0
     model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
-                     terms=[(km.SRP, km.srp_params(F, P1, AU, km.SHADOW_CONICAL, RB, RS), spline_table(ts, sun)),
-                            (km.MAGNETIC, m, spline_table(ts, bfield))])
+                     terms=[(km.SRP, km.srp_params(F, P1, AU, km.SHADOW_CONICAL, RB, RS), _table(ts, sun)),
+                            (km.MAGNETIC, m, _table(ts, bfield))])
     assert list(model[0][1:, km.FLAGS]) == [km.FIRST_TABLE_SLOT, km.FIRST_TABLE_SLOT + 1]
     t = np.array([0.0, 1000.0, 2000.0, 3000.0])
     q = np.array([qt.normalize(rng.normal(size=4)) for _ in t])
@@ -185,7 +193,7 @@ def test_drag_with_gravity_gradient_in_the_step_loop():
     """A model of two terms through the compiled RHS: q.Q stays 0 and |q| = 1 (tangent)."""
     F = _facets()
     ts, rs, _, _ = _orbit_samples()
-    dens = spline_table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
+    dens = _table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
     model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
                      terms=[(km.GRAVITY_GRADIENT, [GM], None), (km.DRAG, km.drag_params(F, WE), dens)])
     y = np.r_[qt.normalize(rng.normal(size=4)), np.zeros(4)]
@@ -200,9 +208,9 @@ def test_environment_terms_in_lanes_are_the_single_member_operations():
     member, bitwise, for an odd group."""
     F = _facets()
     ts, rs, _, _ = _orbit_samples()
-    dens = spline_table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
-    sun = spline_table(ts, np.array([1.2e8, -8.0e7, 3.0e7]) + ts[:, None] * np.array([1.0, 2.0, 0.5]))
-    bf = spline_table(ts, 3e-5 * np.stack([np.cos(ts / 900.0), np.sin(ts / 700.0), 0.3 * np.ones_like(ts)], axis=1))
+    dens = _table(ts, RHO0 * np.exp(-((rs - REQ) - H0) / HS))
+    sun = _table(ts, np.array([1.2e8, -8.0e7, 3.0e7]) + ts[:, None] * np.array([1.0, 2.0, 0.5]))
+    bf = _table(ts, 3e-5 * np.stack([np.cos(ts / 900.0), np.sin(ts / 700.0), 0.3 * np.ones_like(ts)], axis=1))
     model = km.build(orbit=(km.ORBIT_KEPLER, ORB, None),
                      terms=[(km.GRAVITY_GRADIENT, [GM], None), (km.DRAG, km.drag_params(F, WE), dens),
                             (km.SRP, km.srp_params(F, 4.5e-3, 1.495978707e8, km.SHADOW_CONICAL, REQ, 696000.0), sun),

@@ -1,8 +1,8 @@
 """DOP853 lands on the knots of the environment tables and on a sampled orbit's samples
-(``orbatt.core.model.next_breakpoint``): both are piecewise polynomials in time whose third
-derivative jumps at the knots, and a step across a knot loses DOP853's order. Knots are found
+(``orbatt.core.model.next_breakpoint``): both are piecewise polynomials in time whose
+derivatives jump at the knots, and a step across a knot loses DOP853's order. Knots are found
 in time and in the eccentric anomaly, steps land on them, outputs stay the user's, and the
-magnetic torque and the TLE orbit's gravity gradient converge again."""
+magnetic torque and the TLE orbit's gravity gradient converge with the tolerance."""
 from __future__ import annotations
 
 import math
@@ -49,7 +49,7 @@ def test_next_breakpoint_in_time_and_in_the_anomaly(case):
     body, env, _, T = case
     terms, params, table = env.kernel_model()
     knots = _knots(env)
-    for t in (-1.0, 0.0, knots[3], 0.5 * (knots[10] + knots[11]), knots[-2]):
+    for t in (-1.0, 0.0, knots[3], 0.5 * (knots[7] + knots[8]), knots[-2]):
         expect = knots[knots > t][0]
         assert km.next_breakpoint(t, terms, params, table) == expect
     assert km.next_breakpoint(knots[-1], terms, params, table) == np.inf
@@ -80,17 +80,20 @@ def test_steps_land_on_the_knots_and_outputs_stay_the_users(case, iv):
     np.testing.assert_array_equal(tg.t, grid)
 
 
-def test_the_magnetic_torque_converges_again(case):
-    """One orbit of four slowly turning cubesats under a residual dipole: at rtol 1e-8 within
-    1e-9 rad of a tight run, in both forms and in the lockstep lanes (measured 1e-11 .. 2e-11;
-    before the landing 1.8e-7 .. 1.6e-5 rad, and still 6e-8 at rtol 1e-12)."""
+def test_the_magnetic_torque_converges_with_the_tolerance(case):
+    """One orbit of four slowly turning cubesats under a residual dipole: the error against a
+    tight run falls with the tolerance as it should, 450-1000 rtol (measured 4.5e-6, 7.3e-8, 1.0e-9
+    rad at rtol 1e-8, 1e-10, 1e-12), in both forms and in the lockstep lanes: the tables' knots
+    (600 s apart, landed on) cost no order. (With the 20 s cubic splines the tables were before
+    issue 23, and no landing: 1.8e-7 .. 1.6e-5 rad, and still 6e-8 at rtol 1e-12.)"""
     body, env, states, T = case
     ref = orbatt.propagate(body, states, env, [0.0, T], rtol=3e-15, atol=1e-18).q[:, -1]
-    for iv in ("time", "eccentric-anomaly"):
-        q = orbatt.propagate(body, states, env, [0.0, T], rtol=1e-8, atol=1e-8, independent_variable=iv).q[:, -1]
-        assert angle(q, ref).max() < 1e-9, iv
-    lanes = orbatt.propagate(body, states, env, [0.0, T], method="dop853-lanes", rtol=1e-8, atol=1e-8, lanes=4)
-    assert angle(lanes.q[:, -1], ref).max() < 1e-9
+    for rtol in (1e-8, 1e-12):
+        for iv in ("time", "eccentric-anomaly"):
+            q = orbatt.propagate(body, states, env, [0.0, T], rtol=rtol, atol=rtol, independent_variable=iv).q[:, -1]
+            assert angle(q, ref).max() < 3e3 * rtol, (iv, rtol)
+        lanes = orbatt.propagate(body, states, env, [0.0, T], method="dop853-lanes", rtol=rtol, atol=rtol, lanes=4)
+        assert angle(lanes.q[:, -1], ref).max() < 3e3 * rtol, ("lanes", rtol)
 
 
 def test_a_sampled_orbits_samples_are_breakpoints():
