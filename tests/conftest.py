@@ -23,13 +23,14 @@ BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 
 
 def pytest_collection_modifyitems(config, items):
-    """Tests marked ``after_compile`` (checks that kernels load from numba's cache) go last: by
-    then the other tests have compiled the kernel families, and the checks load them instead of
-    compiling them a second time in their own processes, beside the tests that compile them
-    (issue 26: 136 s of a cold run's 2-core time went to such a duplicate)."""
-    late = [item for item in items if item.get_closest_marker("after_compile")]
-    if late:
-        items[:] = [item for item in items if not item.get_closest_marker("after_compile")] + late
+    """Tests marked ``cache_check`` (kernels load from numba's cache in a fresh process, whose
+    first pass compiles the kernel families) go first: a cold run then compiles those families
+    at the start, for the tests after them. Collected last they were the run's tail (~50 s
+    with the other worker idle, issue 26); in the middle they compiled beside the tests that
+    needed the same kernels."""
+    first = [item for item in items if item.get_closest_marker("cache_check")]
+    if first:
+        items[:] = first + [item for item in items if not item.get_closest_marker("cache_check")]
 
 
 @pytest.fixture(scope="session")

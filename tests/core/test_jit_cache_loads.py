@@ -6,8 +6,8 @@ import sys
 
 import pytest
 
-# they check what is in the cache: run after the other tests compiled the kernels (conftest.py)
-pytestmark = pytest.mark.after_compile
+# they check what is in the cache, compiling it first if it is cold: collected first (conftest.py)
+pytestmark = pytest.mark.cache_check
 
 CODE = """
 import sys, numpy as np, orbatt
