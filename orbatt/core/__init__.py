@@ -49,9 +49,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import INTERPRETED
+from ._jit import INTERPRETED, fast_paths_in_use
 
-__all__ = ["INTERPRETED", "kernel_floats"]
+__all__ = ["INTERPRETED", "fast_paths_in_use", "kernel_floats"]
 
 
 def kernel_floats(a):
@@ -65,12 +65,3 @@ def kernel_floats(a):
     if a.flags.c_contiguous and a.flags.writeable:
         return a
     return np.array(a, dtype=np.float64, order="C")
-
-
-def fast_paths_in_use() -> dict:
-    """``{"numba-cache-loads": bool, "borrowed-arrays": bool}``: the compiled kernels' fast
-    paths (:mod:`orbatt.fast_paths`) this process uses now (a cache load that found numba's
-    internals changed has turned its path off)."""
-    from . import _jit
-
-    return {"numba-cache-loads": bool(_jit.FAST_LOADS), "borrowed-arrays": bool(_jit.BORROWED)}

@@ -90,6 +90,13 @@ class _CheckedCache(FunctionCache):
 _DISCARDED: list = []
 
 
+def fast_paths_in_use() -> dict:
+    """``{"numba-cache-loads": bool, "borrowed-arrays": bool}``: the compiled kernels' fast
+    paths (:mod:`orbatt.fast_paths`) this process uses now (a cache load that found numba's
+    internals changed has turned its path off); re-exported by :mod:`orbatt.core`."""
+    return {"numba-cache-loads": bool(FAST_LOADS), "borrowed-arrays": bool(BORROWED)}
+
+
 def core_stamp() -> str:
     """A digest of every source file of :mod:`orbatt.core` (name, modification time, size),
     folded into each kernel's cache stamp by :class:`_CheckedCache`.
