@@ -321,10 +321,10 @@ def evaluate_members(potential, body, inertia, t, q, want_tau):
     cls = type(potential)
     if isinstance(potential, Potential) and all(getattr(getattr(cls, name), "kernel_backed", False)
                                                 for name in ("evaluate", "term_torques")):
-        t = np.ascontiguousarray(t, dtype=np.float64)
-        q = np.ascontiguousarray(q, dtype=np.float64)
+        t = kernel_floats(t)
+        q = kernel_floats(q)
         potential.evaluate(body, t, q[0])  # what evaluate checks (the body, the times), once
-        U, tau = kev.evaluate_members(t, q, np.ascontiguousarray(inertia, dtype=np.float64),
+        U, tau = kev.evaluate_members(t, q, kernel_floats(inertia),
                                      *potential.kernel_model(), not _total_torque_only(potential), want_tau)
         return U, (tau if want_tau else None)
     members = [energy_and_torques(potential, member_body(body, inertia[e]), t, q[e], want_tau)
