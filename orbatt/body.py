@@ -122,7 +122,7 @@ class RigidBody:
         if min(value.tolist()) <= 0:  # (value <= 0).any() of three finite floats
             raise InputError(f"inertia: moments must be positive, got {value.tolist()}")
         check_triangle(value)
-        self._value = value
+        self._value = np.array(value, dtype=np.float64)  # a copy: the caller's array stays writeable
         self._value.flags.writeable = False
         self.wheels = _check_wheels(wheels, value, self.dimensionless)
 

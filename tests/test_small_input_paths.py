@@ -64,3 +64,13 @@ def test_empty_inputs_keep_their_shapes():
     assert qt.mul(empty, [1.0, 0.0, 0.0, 0.0]).shape == (0, 4)
     assert qt.mul([1.0, 0.0, 0.0, 0.0], empty).shape == (0, 4)
     assert [np.shape(x) for x in qt.to_euler321(empty)] == [(0,), (0,), (0,)]
+
+
+def test_a_body_leaves_the_callers_inertia_array_alone():
+    """RigidBody keeps a frozen copy: the caller's array stays writeable (it froze the caller's
+    own array, which then reached the compiled kernels as another numba type)."""
+    inertia = np.array([400.0, 500.0, 600.0])
+    body = RigidBody(inertia)
+    assert inertia.flags.writeable
+    inertia[0] = 450.0
+    assert body.inertia_value.tolist() == [400.0, 500.0, 600.0]

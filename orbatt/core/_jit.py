@@ -9,7 +9,9 @@ which the step loops catch and reject, instead of raising).
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import itertools
 import os
 import warnings
 from pathlib import Path
@@ -23,10 +25,55 @@ from numba.extending import intrinsic
 
 from ..fast_paths import ENABLED as _FAST_PATHS
 
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows: numba's own unlocked saves
+    fcntl = None
+
+#: the lock file of a cache folder (:func:`cache_lock`)
+LOCK_NAME = "orbatt-numba-cache.lock"
+
+
+@contextlib.contextmanager
+def cache_lock(folder, exclusive):
+    """Hold the lock of the numba cache folder ``folder``: ``exclusive`` to change an index
+    (:meth:`_CheckedCache.save_overload`), shared to read an index and the entry it names.
+
+    numba's own save reads a kernel's index, takes the first unused data-file number and
+    writes the index and then the data, unlocked. Two processes compiling kernels that share an
+    index (two signatures of one function, or the variants of one closure, such as the
+    DOP853 and Verner loops of :func:`orbatt.core.rk_loop.loop_of`) at once, as the background
+    warm-up beside a first run, Dask's workers or pytest's do, both take the same number:
+    one index entry then names the other's machine code, and every later process loads it
+    silently for the wrong kernel (seen: ensemble runs failing with a step-size underflow
+    after a cold parallel test run). Without ``fcntl`` (Windows), or where the folder cannot
+    hold the lock file, nothing is locked (numba's own behaviour)."""
+    fd = None
+    if fcntl is not None:
+        path = os.path.join(folder, LOCK_NAME)
+        for flags in (os.O_RDWR | os.O_CREAT, os.O_RDONLY):
+            try:
+                fd = os.open(path, flags, 0o666)
+                break
+            except OSError:
+                continue
+    if fd is None:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
 
 class _CheckedCache(FunctionCache):
     """numba's disk cache of a kernel that survives an unreadable entry, and (where numba's
     internals are the ones checked) loads without initializing the compiler.
+
+    **Concurrent processes.** Saves hold the cache folder's exclusive lock and loads its shared
+    lock (:func:`cache_lock`): processes compiling at once no longer give two kernels the same
+    data file.
 
     **Unreadable entries.** numba unpickles the index (``.nbi``) and data (``.nbc``) files as
     they are: a truncated or corrupted file (a full disk, a killed writer, a copied cache)
@@ -52,6 +99,10 @@ class _CheckedCache(FunctionCache):
             cache_file._source_stamp = (cache_file._source_stamp, core_stamp())
 
     def load_overload(self, sig, target_context):
+        with cache_lock(self._cache_path, False):
+            return self._locked_load(sig, target_context)
+
+    def _locked_load(self, sig, target_context):
         global FAST_LOADS
         if FAST_LOADS:
             try:
@@ -69,6 +120,34 @@ class _CheckedCache(FunctionCache):
         except Exception as exc:  # noqa: BLE001 - any unreadable entry: recompile instead of failing
             self._discard(exc)
             return None
+
+    def save_overload(self, sig, data):
+        """numba's save, under the folder's exclusive lock (:func:`cache_lock`), and writing
+        the data file before the index entry that names it (numba writes the index first: a
+        process loading in between would read a missing or stale data file)."""
+        cache_file = self._cache_file
+        if not all(hasattr(cache_file, name) for name in ("_load_index", "_save_index", "_save_data", "_data_name")):
+            with cache_lock(self._cache_path, True):  # numba's internals differ: its own save, serialized
+                return super().save_overload(sig, data)
+        with self._guard_against_spurious_io_errors():
+            if not self._enabled or not self._impl.check_cachable(data):
+                return None
+            self._impl.locator.ensure_cache_path()
+            key = self._index_key(sig, data.codegen)
+            data = self._impl.reduce(data)
+            with cache_lock(self._cache_path, True):
+                try:
+                    overloads = cache_file._load_index()
+                except Exception:  # noqa: BLE001 - an unreadable index: start a new one
+                    overloads = {}
+                name = overloads.get(key)
+                if name is None:
+                    used = set(overloads.values())
+                    name = next(n for n in map(cache_file._data_name, itertools.count(1)) if n not in used)
+                cache_file._save_data(name, data)
+                overloads[key] = name
+                cache_file._save_index(overloads)
+        return None
 
     def _discard(self, exc):
         index = getattr(getattr(self, "_cache_file", None), "_index_path", None)
