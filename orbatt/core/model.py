@@ -381,13 +381,17 @@ def _term_lanes(kind, p0, c, Y, nl, I, params, G, first):
             G[3, l] += g[3]
 
 
-@jit_inline
+@jit
 def terms_lanes(t, Y, nl, I, terms, params, table, work, r, xhat, v, G):
     """:func:`terms_at` for lanes ``0..nl-1`` of ``Y (8, L)`` (inertia ``I (3, L)``) into
     ``G (4, L)``, the same sums in the same order as one member. One loop over the lanes per
     term, specialized to the term's kind (a constant kind makes :func:`term_value`'s
     dispatch fold away, so that LLVM vectorizes the loop: it does not unswitch a loop on a
-    run-time kind); kinds without a specialization take the generic loop."""
+    run-time kind); kinds without a specialization take the generic loop. Compiled once and
+    called (one call serves a whole group): the lanes right-hand side
+    (:func:`orbatt.core.hamiltonian.rhs_lanes`) and the splitting kicks
+    (:func:`gradient_lanes_called`) share it instead of compiling a copy each (~15 s apiece
+    from a cold cache). Pass borrowed arrays (:func:`orbatt.core._jit.borrow`)."""
     for j in range(1, terms.shape[0]):
         kind, p0, c = term_constants(j, t, terms, params, table, work, r, xhat, v)
         first = j == 1

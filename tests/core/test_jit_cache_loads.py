@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-# they check what is in the cache, compiling it first if it is cold: collected first (conftest.py)
+# they check what is in the cache, compiling what it lacks first: collected last (conftest.py)
 pytestmark = pytest.mark.cache_check
 
 CODE = """
