@@ -22,18 +22,6 @@ SHIPPED = Path(__file__).parent.parent / "scenarios"
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 
 
-def pytest_collection_modifyitems(config, items):
-    """Tests marked ``cache_check`` (kernels load from numba's cache in a fresh process, whose
-    first pass compiles what the cache lacks) go last: by then the workers have cached every
-    kernel family, and the first pass only loads (measured 2.7 s, against 51-64 s collected
-    first). They went first while concurrent compiles could lose cache entries (numba's
-    unlocked index updates, fixed in :mod:`orbatt.core._jit`): the first pass then recompiled
-    what had been lost, at the run's tail."""
-    last = [item for item in items if item.get_closest_marker("cache_check")]
-    if last:
-        items[:] = [item for item in items if not item.get_closest_marker("cache_check")] + last
-
-
 @pytest.fixture(scope="session")
 def load_benchmark():
     """``load(name)``: the module of the script ``benchmarks/<name>.py`` (the test is skipped
