@@ -17,6 +17,11 @@ import pytest
 # `orbatt run` in a subprocess runs compiled, as in-process: a first run's interpreted kernels
 # and background warm-up (orbatt.coldstart) are tested on their own (tests/test_coldstart.py)
 os.environ.setdefault("ORBATT_COLD_START", "compile")
+# ... and imports the orbatt this process imported: without this, `python -m orbatt.cli` and
+# `python -c` started from a clone's root put the source tree ./orbatt first on sys.path, so that
+# with a non-editable install the subprocesses ran (and compiled, into a cache of their own) the
+# source tree, not the installed package the suite tests (Python >= 3.11, as `python -P`)
+os.environ.setdefault("PYTHONSAFEPATH", "1")
 
 SHIPPED = Path(__file__).parent.parent / "scenarios"
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"

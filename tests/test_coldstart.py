@@ -231,6 +231,7 @@ def test_first_run_from_a_clone_root_warms_the_installed_package(tmp_path, shipp
     (root / "orbatt" / "__init__.py").write_text("raise ImportError('the source tree beside the run was imported')\n")
     cache = tmp_path / "cache"
     env = _env(NUMBA_CACHE_DIR=str(cache))
+    env.pop("PYTHONSAFEPATH", None)  # (conftest.py) as a user's shell: the warm-up itself must not import ./orbatt
     first = subprocess.run(["orbatt", "run", "paper-torque-free", "-o", "one.nc"], capture_output=True, text=True,
                            env=env, cwd=root, timeout=300)
     assert first.returncode == 0, first.stderr
