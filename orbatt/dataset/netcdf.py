@@ -230,7 +230,9 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
         False (default): create or overwrite ``path``. True: add the samples of ``ds`` after
         those in ``path`` (created if missing). The variables and their non-time coordinates
         must match; a first sample at the file's last time (as when a run is propagated
-        segment by segment) is dropped; an earlier one is refused. ``integration_stats``
+        segment by segment) is dropped; an earlier one is refused. The new part's eclipses
+        follow the file's (``eclipse`` is unlimited; one under way at the boundary stays one
+        eclipse). ``integration_stats``
         numbers are summed, ``integration_complete`` is the AND of both, and ``history`` and
         ``date_modified`` record the append.
     complevel : int
@@ -274,13 +276,44 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
             if form is not None and "time" in form.sizes and writable(form.variables, form.attrs, enc):
                 with replacing(path) as tmp:
                     write_content(tmp, form.variables, set(form.coords), form.attrs, encoding=enc,
-                                  unlimited_dims=["time"])
+                                  unlimited_dims=_unlimited(form.sizes))
             else:
                 enc_ds = encode(_as_dataset(ds))
-                _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=["time"],
+                _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=_unlimited(enc_ds.sizes),
                                  encoding=encoding(enc_ds, complevel, chunk_time))
     if interrupted:
         raise KeyboardInterrupt
+
+
+def _unlimited(sizes):
+    """The unlimited dimensions of a new file: ``time``, and ``eclipse`` where the run has one
+    (an append adds the new part's eclipses: :func:`_append_eclipses`)."""
+    return ["time"] + (["eclipse"] if "eclipse" in sizes else [])
+
+
+def _append_eclipses(f, piece, engine, name):
+    """Add the eclipses of the new samples ``piece`` (file form) after those of the open file
+    ``f``: an eclipse under way at the boundary (the file's last without an exit, the new part's
+    first without an entry) becomes one. Files written before the ``eclipse`` dimension was
+    unlimited take no new eclipse: refused, naming the file, rather than dropped."""
+    if "eclipse_entry" not in piece.variables:
+        return
+    ent, ext = (np.asarray(piece[k].values, dtype=np.float64) for k in ("eclipse_entry", "eclipse_exit"))
+    fe, fx = f.variables["eclipse_entry"], f.variables["eclipse_exit"]
+    m = int(fe.shape[0])
+    if m and ent.size and np.isnan(float(fx[m - 1])) and np.isnan(ent[0]):
+        fx[m - 1] = ext[0]  # the eclipse under way at the boundary: one eclipse
+        ent, ext = ent[1:], ext[1:]
+    if not ent.size:
+        return
+    if not f.dimensions["eclipse"].isunlimited():
+        raise InputError(f"append: {name} holds a fixed number of eclipses (written before the eclipse dimension "
+                         f"was unlimited) and the new samples have {ent.size} more; write the whole run to a new "
+                         "file")
+    if engine == "h5netcdf":
+        f.resize_dimension("eclipse", m + ent.size)
+    fe[m:m + ent.size] = ent
+    fx[m:m + ent.size] = ext
 
 
 def _as_dataset(ds):
@@ -385,7 +418,7 @@ def _append(ds: xr.Dataset, path, engine, name=None):
             return
         if engine == "h5netcdf":
             f.resize_dimension("time", n0 + n)
-        for name, var in piece.variables.items():
+        for vname, var in piece.variables.items():
             if "time" not in var.dims:
                 continue
             ax = var.dims.index("time")
@@ -393,7 +426,8 @@ def _append(ds: xr.Dataset, path, engine, name=None):
             idx_new[ax] = slice(start, None)
             idx_file = [slice(None)] * var.ndim
             idx_file[ax] = slice(n0, n0 + n)
-            f.variables[name][tuple(idx_file)] = np.asarray(var.values)[tuple(idx_new)]
+            f.variables[vname][tuple(idx_file)] = np.asarray(var.values)[tuple(idx_new)]
+        _append_eclipses(f, piece, engine, name)
         # global attributes
         get = (lambda k: f.attrs.get(k)) if engine == "h5netcdf" else (
             lambda k: f.getncattr(k) if k in f.ncattrs() else None)
