@@ -27,6 +27,19 @@ SHIPPED = Path(__file__).parent.parent / "scenarios"
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 
 
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``cache_check`` (kernels load from numba's cache in a fresh process, whose
+    first pass compiles what the cache lacks) go last: by then the workers have cached the
+    kernel families and the first pass only loads (2.7-8 s). Collected first they compiled what
+    the workers were compiling too (47-64 s); collected last they also compiled, while concurrent
+    compiles could lose cache entries (numba's unlocked index updates, :mod:`orbatt.core._jit`)
+    and while their subprocesses imported the source tree ./orbatt of a clone's root instead of
+    the installed package (``PYTHONSAFEPATH`` above)."""
+    last = [item for item in items if item.get_closest_marker("cache_check")]
+    if last:
+        items[:] = [item for item in items if not item.get_closest_marker("cache_check")] + last
+
+
 @pytest.fixture(scope="session")
 def load_benchmark():
     """``load(name)``: the module of the script ``benchmarks/<name>.py`` (the test is skipped

@@ -6,10 +6,7 @@ import sys
 
 import pytest
 
-# they check what is in the cache, compiling what it lacks first: deselected by default and run
-# after the suite (`pytest -m cache_check`, .ci/run), when every kernel family is cached and their
-# first pass only loads (2.7 s, against 47-64 s in the middle of a cold run, where it compiled
-# what the workers were compiling too)
+# they check what is in the cache, compiling what it lacks first: collected last (conftest.py)
 pytestmark = pytest.mark.cache_check
 
 CODE = """
