@@ -246,10 +246,12 @@ class PDControl:
         gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
         Sun's position (``"sun"``) for ``target = "sun"``."""
         sun = tables("sun") if self.target == "sun" else None
-        key = tuple(wheels)
+        # made once per set of wheels, settings and Sun table (~60 us): the settings are in the
+        # key, so that a law changed after a run (law.kp = ...) is not run with its old row
+        key = (tuple(wheels), repr(sorted(self.settings().items())))
         rows = self.__dict__.setdefault("_rows", {})
         hit = rows.get(key)
-        if hit is None or hit[0] is not sun:  # made once per set of wheels and Sun table (~60 us)
+        if hit is None or hit[0] is not sun:
             hit = rows[key] = (sun, self.row(wheels, sun))
         return hit[1]
 

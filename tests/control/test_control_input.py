@@ -125,3 +125,20 @@ def test_pd_params_refuses_a_target_quaternion_that_is_not_unit():
             kc.pd_params(target, 1.0, 1.0, np.inf, (0.0, 0.0, 0.0, 0.0))
     assert kc.pd_params(kc.TARGET_ORBITAL, 1.0, 1.0, np.inf)[5:9].tolist() == [1.0, 0.0, 0.0, 0.0]
     assert kc.pd_params(kc.TARGET_SUN, 1.0, 1.0, np.inf, (0.0, 0.0, 1.0))[5:9].tolist() == [0.0, 0.0, 1.0, 0.0]
+
+
+def test_a_law_changed_after_a_run_runs_with_its_new_gains():
+    """The PD law's model row is kept between runs, keyed on its settings: a changed gain
+    makes a new row (the old row ran silently with the old gains)."""
+    law = orbatt.PDControl("inertial", target_q=[1.0, 0.0, 0.0, 0.0], **PD)
+    body = orbatt.RigidBody(INERTIA)
+    s0 = orbatt.State.from_omega(body, [0.9, 0.1, 0.3, 0.3], [0.0, 0.0, 0.01] * u.rad / u.s)
+    t = np.linspace(0.0, 60.0, 3)
+    before = orbatt.propagate(body, s0, orbatt.TorqueFree(), t, control=law).q[-1]
+    law.kp = 4.0 * law.kp
+    after = orbatt.propagate(body, s0, orbatt.TorqueFree(), t, control=law).q[-1]
+    fresh = orbatt.propagate(body, s0, orbatt.TorqueFree(), t,
+                             control=orbatt.PDControl("inertial", target_q=[1.0, 0.0, 0.0, 0.0], kp="2e-3 N m",
+                                                      kd="8e-2 N m s")).q[-1]
+    assert not np.array_equal(before, after)
+    np.testing.assert_array_equal(after, fresh)
