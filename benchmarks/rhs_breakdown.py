@@ -58,22 +58,16 @@ def loops():
         return acc
 
     @nb.njit
-    def orbit(s, terms, params, table, work):
+    def constants(s, terms, params, table, work, with_terms):
+        """The orbit at each point, and (``with_terms``) every term's constants there."""
         acc = 0.0
         for i in range(s.shape[0]):
             t, dtds, r, x, v = km.orbit_at(s[i], terms, params, table, work)
             acc += t + dtds + r + x[0] + x[1] + x[2] + v[0] + v[1] + v[2]
-        return acc
-
-    @nb.njit
-    def constants(s, terms, params, table, work):
-        acc = 0.0
-        for i in range(s.shape[0]):
-            t, dtds, r, x, v = km.orbit_at(s[i], terms, params, table, work)
-            acc += t + dtds + r + x[0] + x[1] + x[2] + v[0] + v[1] + v[2]
-            for j in range(1, terms.shape[0]):
-                kind, p0, c = km.term_constants(j, t, terms, params, table, work, r, x, v)
-                acc += c[0] + c[1] + c[2] + c[3] + c[4] + c[5] + c[6] + c[7]
+            if with_terms:
+                for j in range(1, terms.shape[0]):
+                    kind, p0, c = km.term_constants(j, t, terms, params, table, work, r, x, v)
+                    acc += c[0] + c[1] + c[2] + c[3] + c[4] + c[5] + c[6] + c[7]
         return acc
 
     @nb.njit
@@ -99,7 +93,7 @@ def loops():
                 acc += u + g[0] + g[1] + g[2] + g[3]
         return acc
 
-    return rhs, orbit, constants, values
+    return rhs, constants, values
 
 
 def best_ns(f, n, *args, repeats=5):
@@ -147,7 +141,7 @@ def main(argv=None):
     q0 = qt.normalize(rng.normal(size=(members, 4)))
     states = orbatt.State.from_omega(sc.body, q0, rng.normal(size=(members, 3)) * math.radians(0.5) * u.rad / u.s)
     rtol, atol = sc.settings["rtol"], sc.settings["atol"]
-    f_rhs, f_orbit, f_constants, f_values = loops()
+    f_rhs, f_constants, f_values = loops()
     rows = []
     for label, pot in models:
         an = EccentricAnomaly(assemble(pot, [sc.body]), 0.0, np.array([t_end]))
@@ -156,8 +150,8 @@ def main(argv=None):
         work = kp.new_work()
         dy = np.empty(8)
         t_rhs = best_ns(f_rhs, n, s, ys, inertia, terms, params, table, work, dy)
-        t_orbit = best_ns(f_orbit, n, s, terms, params, table, work)
-        t_const = best_ns(f_constants, n, s, terms, params, table, work) - t_orbit
+        t_orbit = best_ns(f_constants, n, s, terms, params, table, work, False)
+        t_const = best_ns(f_constants, n, s, terms, params, table, work, True) - t_orbit
         t_values = best_ns(f_values, n, s, ys, inertia, terms, params, table, work)
         tr = orbatt.propagate(sc.body, states, pot, [0.0, t_end], rtol=rtol, atol=atol)
         rows.append((label, t_rhs, t_orbit, t_const, t_values, tr.stats["rhs_evaluations"] / members))
