@@ -125,8 +125,10 @@ class _CheckedCache(FunctionCache):
         """numba's save, under the folder's exclusive lock (:func:`cache_lock`), and writing
         the data file before the index entry that names it (numba writes the index first: a
         process loading in between would read a missing or stale data file)."""
-        cache_file = self._cache_file
-        if not all(hasattr(cache_file, name) for name in ("_load_index", "_save_index", "_save_data", "_data_name")):
+        cache_file = getattr(self, "_cache_file", None)
+        if not (all(hasattr(cache_file, name) for name in ("_load_index", "_save_index", "_save_data", "_data_name"))
+                and all(hasattr(self, name) for name in ("_guard_against_spurious_io_errors", "_impl", "_index_key",
+                                                         "_enabled"))):
             with cache_lock(self._cache_path, True):  # numba's internals differ: its own save, serialized
                 return super().save_overload(sig, data)
         with self._guard_against_spurious_io_errors():

@@ -9,8 +9,8 @@ edge function (:func:`orbatt.core.switches.eclipse_times`: the function the step
 on); an eclipse under way at the run's start has no entry (NaT), one under way at its end no
 exit. In the file they are float64 ``seconds since <epoch>`` (CF, whole microseconds), like
 ``time``, along an unlimited ``eclipse`` dimension (an append adds the later part's eclipses:
-:func:`orbatt.dataset.netcdf.write_netcdf`); the in-memory Dataset holds them as ``datetime64[ns]`` (:func:`decode_variables`,
-:func:`file_variables`).
+:func:`orbatt.dataset.netcdf.write_netcdf`); the in-memory Dataset holds them as
+``datetime64[ns]`` (:func:`decode_variables`, :func:`file_variables`).
 """
 from __future__ import annotations
 

@@ -279,7 +279,8 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
                                   unlimited_dims=_unlimited(form.sizes))
             else:
                 enc_ds = encode(_as_dataset(ds))
-                _write_replacing(enc_ds, path, engine=engine, format="NETCDF4", unlimited_dims=_unlimited(enc_ds.sizes),
+                _write_replacing(enc_ds, path, engine=engine, format="NETCDF4",
+                                 unlimited_dims=_unlimited(enc_ds.sizes),
                                  encoding=encoding(enc_ds, complevel, chunk_time))
     if interrupted:
         raise KeyboardInterrupt
