@@ -15,7 +15,7 @@ from ..binary import BinarySystem, Impulse, binary_content, propagate_binary
 from ..binary.system import rtn_basis
 from ..errors import InputError
 from .binary_schema import BinarySpec
-from .build import build_output_times, run_to_content
+from .build import MAX_ANGLE_PER_STEP, MAX_WORK_STEPS, build_output_times, run_to_content
 from .fields import FieldContext
 
 __all__ = ["BinaryScenario"]
@@ -94,6 +94,36 @@ class BinaryScenario:
         if "step" in spec.integration:
             kind, value = spec.integration["step"]
             self.settings["step"] = value * self.period if kind == "orbits" else value
+        spin = float(np.linalg.norm(omega))
+        spin_primary = 0.0 if prim is None else float(np.linalg.norm(prim["omega"]))
+        self.work_steps = self._check_work(ctx, max(spin, spin_primary),
+                                           "[primary] omega" if spin_primary > spin else "[initial] omega")
+
+    def _check_work(self, ctx, spin, spin_key):
+        """The lower estimate of one run's integration steps (:func:`orbatt.scenario.build.check_work`'s,
+        for the coupled bodies): ``t_end / step`` for the splitting, else the relative orbit's
+        angle (twice, as the gravity gradient sees it) and the faster body's turn over ``t_end``
+        (``spin``, rad/s, given by ``spin_key``), at most
+        :data:`~orbatt.scenario.build.MAX_ANGLE_PER_STEP` a step. A run above
+        :data:`~orbatt.scenario.build.MAX_WORK_STEPS` is refused naming the key that dominates;
+        a sweep bounds its cases by it (:func:`orbatt.sweep.cases.check_sweep_work`)."""
+        t_end = self.t_end
+        step = self.settings.get("step") if self.method == "splitting" else None
+        orbit = 4 * math.pi * t_end / self.period
+        steps = t_end / step if step is not None else (orbit + spin * t_end) / MAX_ANGLE_PER_STEP
+        if steps <= MAX_WORK_STEPS:
+            return steps
+        if step is not None:
+            where, what = "[integration] step", f"{step:.6g} s over t_end = {t_end:.6g} s is {steps:.3g} steps"
+        elif spin * t_end >= orbit:
+            where, what = spin_key, (f"the {'primary' if spin_key.startswith('[primary]') else 'body'} turns "
+                                     f"{spin * t_end:.3g} rad over t_end = {t_end:.6g} s: at least {steps:.3g} "
+                                     "integration steps")
+        else:
+            where, what = "[orbit]", (f"the orbit (period {self.period:.3g} s) goes round {t_end / self.period:.3g} "
+                                      f"times: at least {steps:.3g} integration steps")
+        raise ctx.error(where, f"{what}, more than {MAX_WORK_STEPS:.0e} (hours of computing); shorten [integration] "
+                               "t_end" + (" or give a longer step" if step is not None else ""))
 
     def run(self, method=None, progress=False, **overrides):
         """Propagate and return the result :class:`xarray.Dataset` (:mod:`orbatt.binary.dataset`).

@@ -32,7 +32,8 @@ apply to dimensional scenarios): a value outside describes no satellite and is r
 the key. Before a run, the work is estimated from the rates, the orbit and the time scales of
 the torques and control laws (`sqrt(torque / I)`, `sqrt(kp / I)`, `kd / I`, ...): a run needing
 more than 1e8 integration steps, or more than 2e6 output times, is refused naming the key that
-dominates.
+dominates (a binary: the relative orbit and both bodies' turns, or `t_end / step`); a sweep's
+cases times the nominal case's steps are bounded by 1e9.
 
 **Normalized units.** A scenario written in plain numbers throughout (`inertia`, `omega`,
 `gm`, `a`, `t_end`, `output_step`, ...) is dimensionless, as in the spin-orbit literature:

@@ -176,7 +176,7 @@ def check_sweep_work(scenario, spec):
     case's estimated steps (:attr:`orbatt.scenario.Scenario.work_steps`, at least
     :data:`MIN_CASE_STEPS` a case) exceed :data:`MAX_SWEEP_WORK_STEPS`, before any sample is
     drawn."""
-    per_case = getattr(scenario, "work_steps", None)  # None: a study without the estimate (a binary)
+    per_case = getattr(scenario, "work_steps", None)  # None: a study without the estimate
     if per_case is None:
         return
     steps = spec.cases * max(per_case, MIN_CASE_STEPS)

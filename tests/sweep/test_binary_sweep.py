@@ -201,3 +201,24 @@ def test_shipped_montecarlo_scenario_from_the_cli(tmp_path):
         assert np.array_equal(ds["q_final"].values[4], one["q"].values[-1])
         assert np.array_equal(ds["position_final"].values[4], one["position"].values[-1])
         assert int(ds["integration_failed"].sum()) == 0
+
+
+def test_a_binary_run_and_sweep_are_bounded_by_their_work():
+    """Binary scenarios estimate their steps as rigid ones do (the relative orbit's angle, the
+    bodies' turn, or t_end / step): a run of ~1e8 steps is refused naming the key, and a sweep
+    of cases times their steps above 1e9 naming ``[sweep] samples`` (binary sweeps had no
+    bound)."""
+    long = re.sub(r"^output_step = .*$", 'output_step = "1000 yr"', _dd(t_end='"30000 yr"'), flags=re.M)
+    with pytest.raises(ScenarioError, match=r"\[primary\] omega: the primary turns .* rad over t_end = .*more "
+                                            r"than 1e\+08 \(hours of computing\)"):
+        Scenario(parse(long, "long.toml"))  # Didymos turns in 2.26 h, Dimorphos's orbit takes 11.9 h
+    slow = long.replace('omega = ["0 rad/s", "0 rad/s", "7.72e-4 rad/s"]', 'omega = ["0 rad/s", "0 rad/s", "0 rad/s"]')
+    with pytest.raises(ScenarioError, match=r"\[orbit\]: the orbit \(period .*more than 1e\+08"):
+        Scenario(parse(slow, "slow.toml"))
+    year = re.sub(r"^output_step = .*$", 'output_step = "10 yr"', _dd(t_end='"300 yr"'), flags=re.M)
+    sc = Scenario(parse(year, "year.toml"))
+    # the primary's turn over 300 years (7.3e6 rad), pi a step, as the rigid scenarios count
+    assert 2e6 < sc.work_steps < 4e6
+    with pytest.raises(ScenarioError, match=r"\[sweep\] samples: 2000 cases of at least .* \(days of computing\)"):
+        _sweep('samples = 2000\n[sweep.parameters]\n'
+               '"body.mass" = { distribution = "uniform", low = "3e9 kg", high = "6e9 kg" }\n', text=year)
