@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 
 from ..errors import InputError, ScenarioError
+from ..units import LEGACY_OUTPUT
 from ..scenario import Scenario, load_scenario, parse
 from ..scenario.binary_schema import BinarySpec
 from ..scenario.paths import toml_text
@@ -20,7 +21,7 @@ from ..scenario.sweep_schema import sweep_units
 from .chunk import compute_chunk
 from .sampling import SAMPLING_VERSION, draw_samples, nominal_values
 
-__all__ = ["Sweep", "load_sweep", "check_sweep_work", "FORMAT", "MAX_SWEEP_WORK_STEPS", "MIN_CASE_STEPS"]
+__all__ = ["Sweep", "load_sweep", "check_sweep_work", "si_description", "FORMAT", "MAX_SWEEP_WORK_STEPS", "MIN_CASE_STEPS"]
 
 #: most integration steps a sweep may need by the lower estimate (cases times the nominal
 #: case's steps): about an hour of a few cores at the compiled kernels' speed
@@ -150,7 +151,7 @@ class Sweep:
 
     def attrs(self) -> dict:
         """The sweep's global attributes (seed, parameters, cases, ...)."""
-        desc = {k: dict(d.describe(self.nominal.get(k)), units=self.units[k]) for k, d in self.spec.parameters.items()}
+        desc = {k: si_description(d.describe(self.nominal.get(k)), self.units[k]) for k, d in self.spec.parameters.items()}
         return {
             "sweep_format": FORMAT,
             "sweep_fingerprint": self.fingerprint,
@@ -169,6 +170,21 @@ class Sweep:
     def __repr__(self):
         return (f"Sweep({self.scenario.name!r}, cases={self.cases}, parameters={list(self.spec.parameters)}, "
                 f"seed={self.seed})")
+
+
+def si_description(desc, unit):
+    """A parameter's description (:meth:`~orbatt.scenario.sweep_schema.Distribution.describe`)
+    with ``units``: its numbers in SI where ``unit`` is a kernel unit of the attitude family
+    (the inertia parameters' kg km^2 -> kg m^2), as its case coordinate is written
+    (:func:`orbatt.sweep.case_coords.parameter_coordinates`)."""
+    conv = LEGACY_OUTPUT.get(unit)
+    if conv is None:
+        return dict(desc, units=unit)
+    si_unit, factor = conv
+    out = {k: ([x * factor for x in v] if k == "values" else v * factor if k in ("mean", "std", "low", "high") else v)
+           for k, v in desc.items()}
+    out["units"] = si_unit
+    return out
 
 
 def check_sweep_work(scenario, spec):

@@ -240,3 +240,17 @@ def test_a_file_written_before_opens_in_the_new_form(name):
     expect = {k: v for k, v in D.build.cf_time_attrs(epoch, False).items() if k not in ("units", "calendar")}
     assert new["time"].attrs == expect
     assert (new.orbatt.epoch is None) == (epoch is None)
+
+
+def test_the_sweep_parameters_attribute_is_in_si():
+    """``sweep_parameters`` (the distributions, JSON) gives the inertia in kg m^2, as the case
+    coordinates are written (it gave the kernel's kg km^2)."""
+    import json
+
+    from orbatt.sweep import load_sweep
+
+    sw = load_sweep(Path(__file__).resolve().parents[2] / "scenarios" / "gg-leo-dispersion.toml")
+    desc = json.loads(sw.attrs()["sweep_parameters"])
+    assert desc["inertia1"]["units"] == "kg m^2"
+    assert desc["inertia1"]["mean"] == pytest.approx(12.0) and desc["inertia1"]["std"] == pytest.approx(0.6)
+    assert desc["omega1"]["units"] == "rad s^-1"  # already SI: unchanged
