@@ -276,7 +276,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             nsw = switch_count(terms, params)
             if nsw > 0 and st[ST_SWITCH_K] == 0.0:
                 switch_values(t, y1, terms, params, table, work, gnew)
-                update(work, gnew, nsw, -1)
+                update(work, gnew, nsw, k_sw)  # (-1 here; a literal -1 compiled update a second time)
             if nsw > 0 and st[ST_SWITCH_K] > 1.0:
                 t_sw = st[ST_SWITCH_T]
                 k_sw = int(st[ST_SWITCH_K]) - 2

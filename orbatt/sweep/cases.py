@@ -21,7 +21,8 @@ from ..scenario.sweep_schema import sweep_units
 from .chunk import compute_chunk
 from .sampling import SAMPLING_VERSION, draw_samples, nominal_values
 
-__all__ = ["Sweep", "load_sweep", "check_sweep_work", "si_description", "FORMAT", "MAX_SWEEP_WORK_STEPS", "MIN_CASE_STEPS"]
+__all__ = ["Sweep", "load_sweep", "check_sweep_work", "si_description", "FORMAT", "MAX_SWEEP_WORK_STEPS",
+           "MIN_CASE_STEPS"]
 
 #: most integration steps a sweep may need by the lower estimate (cases times the nominal
 #: case's steps): about an hour of a few cores at the compiled kernels' speed
@@ -151,7 +152,8 @@ class Sweep:
 
     def attrs(self) -> dict:
         """The sweep's global attributes (seed, parameters, cases, ...)."""
-        desc = {k: si_description(d.describe(self.nominal.get(k)), self.units[k]) for k, d in self.spec.parameters.items()}
+        desc = {k: si_description(d.describe(self.nominal.get(k)), self.units[k])
+                for k, d in self.spec.parameters.items()}
         return {
             "sweep_format": FORMAT,
             "sweep_fingerprint": self.fingerprint,
