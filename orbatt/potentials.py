@@ -104,7 +104,7 @@ class Potential:
             t = kernel_floats(t)  # a run's outputs: as they are (np.broadcast_to costs ~3 us)
         else:
             t = kernel_floats(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        return kev.evaluate_many(t, q, kernel_floats(body.inertia_value), *self.kernel_model(), kp.new_work())
+        return kev.evaluate_many(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
 
     def kernel_model(self):
         """The compiled model ``(terms, params, table)`` of this potential

@@ -33,6 +33,7 @@ from typing import Callable
 import numpy as np
 from astropy import units as u
 
+from .core import kernel_floats
 from .core import environment as kenv
 from .core import model as km
 from .core.kinds import BY_CODE, TermKind
@@ -155,7 +156,7 @@ def _constant_row(tq):
 
 
 def _table_values(tabs, name, t, width):
-    return kenv.piece_eval_many(tabs[name], np.ascontiguousarray(t), width)
+    return kenv.piece_eval_many(tabs[name], kernel_floats(t), width)
 
 
 def _drag_fields(tq, t, pos, time, tabs):

@@ -384,7 +384,7 @@ class EnvironmentTorques(Potential):
         (s) and attitudes ``q (N, 4)``."""
         q = kernel_floats(np.atleast_2d(q))
         t = kernel_floats(np.broadcast_to(np.asarray(t, dtype=np.float64), q.shape[:1]))
-        _, tau = kev.evaluate_terms(t, q, kernel_floats(body.inertia_value), *self.kernel_model(), kp.new_work())
+        _, tau = kev.evaluate_terms(t, q, body.inertia_value, *self.kernel_model(), kp.new_work())
         return tau
 
     def fields(self, t):

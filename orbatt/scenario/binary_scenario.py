@@ -96,14 +96,14 @@ class BinaryScenario:
             self.settings["step"] = value * self.period if kind == "orbits" else value
         spin = float(np.linalg.norm(omega))
         spin_primary = 0.0 if prim is None else float(np.linalg.norm(prim["omega"]))
-        self.work_steps = self._check_work(ctx, max(spin, spin_primary),
-                                           "[primary] omega" if spin_primary > spin else "[initial] omega")
+        turning = ("primary", spin_primary) if spin_primary > spin else ("body", spin)
+        self.work_steps = self._check_work(ctx, *turning)
 
-    def _check_work(self, ctx, spin, spin_key):
+    def _check_work(self, ctx, who, spin):
         """The lower estimate of one run's integration steps (:func:`orbatt.scenario.build.check_work`'s,
         for the coupled bodies): ``t_end / step`` for the splitting, else the relative orbit's
         angle (twice, as the gravity gradient sees it) and the faster body's turn over ``t_end``
-        (``spin``, rad/s, given by ``spin_key``), at most
+        (``spin``, rad/s, of ``who``: ``"body"`` or ``"primary"``), at most
         :data:`~orbatt.scenario.build.MAX_ANGLE_PER_STEP` a step. A run above
         :data:`~orbatt.scenario.build.MAX_WORK_STEPS` is refused naming the key that dominates;
         a sweep bounds its cases by it (:func:`orbatt.sweep.cases.check_sweep_work`)."""
@@ -116,9 +116,9 @@ class BinaryScenario:
         if step is not None:
             where, what = "[integration] step", f"{step:.6g} s over t_end = {t_end:.6g} s is {steps:.3g} steps"
         elif spin * t_end >= orbit:
-            where, what = spin_key, (f"the {'primary' if spin_key.startswith('[primary]') else 'body'} turns "
-                                     f"{spin * t_end:.3g} rad over t_end = {t_end:.6g} s: at least {steps:.3g} "
-                                     "integration steps")
+            where = "[primary] omega" if who == "primary" else "[initial] omega"
+            what = (f"the {who} turns {spin * t_end:.3g} rad over t_end = {t_end:.6g} s: at least {steps:.3g} "
+                    "integration steps")
         else:
             where, what = "[orbit]", (f"the orbit (period {self.period:.3g} s) goes round {t_end / self.period:.3g} "
                                       f"times: at least {steps:.3g} integration steps")

@@ -227,13 +227,13 @@ def conserved_energy(spec, potential, orbit, inertia, q, Q, t):
     T = 0.5 * (g[:, 0] * g[:, 0] / inertia[:, 0] + g[:, 1] * g[:, 1] / inertia[:, 1]
                + g[:, 2] * g[:, 2] / inertia[:, 2])
     Upot = np.empty(q.shape[0])
-    tt = np.array([t])
+    tt = np.array([t], dtype=np.float64)
     model = potential.kernel_model()
     for e in range(q.shape[0]):
         if not np.all(np.isfinite(q[e])):
             Upot[e] = np.nan
             continue
-        Upot[e] = kev.evaluate_many(kernel_floats(tt), kernel_floats(q[e:e + 1]), kernel_floats(inertia[e]), *model,
+        Upot[e] = kev.evaluate_many(tt, kernel_floats(q[e:e + 1]), kernel_floats(inertia[e]), *model,
                                    kp.new_work())[0][0]
     H = T + Upot
     if spec.energy == "jacobi":
