@@ -32,6 +32,7 @@ _WHERE = {
     "KeplerOrbit": ".orbits", "ReboundOrbit": ".orbits", "TleOrbit": ".orbits",
     "EnvironmentTorques": ".torques", "Facet": ".torques",
     "BDotControl": ".control", "PDControl": ".control", "ReactionWheel": ".control",
+    "LAWS": ".laws", "control_law": ".laws",
     "rpm": ".units",
     "Sweep": ".sweep", "load_sweep": ".sweep", "run_sweep": ".sweep",
 }
@@ -42,7 +43,8 @@ __all__ = [
     "Method", "METHODS", "methods", "register", "Problem", "ProgressInfo",
     "OrbattError", "InputError", "IntegrationError", "ScenarioError",
     "quaternion", "canonical", "euler", "__version__",
-    "KeplerOrbit", "ReboundOrbit", "TleOrbit", "GravityGradient", "EnvironmentTorques", "Facet", "ReactionWheel", "PDControl", "BDotControl", "orbital",
+    "KeplerOrbit", "ReboundOrbit", "TleOrbit", "GravityGradient", "EnvironmentTorques", "Facet", "ReactionWheel", "PDControl", "BDotControl", "LAWS",
+    "control_law", "orbital",
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
     "to_dataset", "open_dataset", "write_aem", "read_aem",
     "Sweep", "SweepError", "load_sweep", "run_sweep", "rpm",

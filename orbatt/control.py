@@ -26,8 +26,8 @@ from .core import control as kc
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "LAWS", "wheels_row",
-           "wheel_axes_span", "control_law", "reaction_wheel"]
+__all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row",
+           "wheel_axes_span", "reaction_wheel"]
 
 #: a wheel axis or a Sun-pointing axis must have |a| = 1 within this
 AXIS_TOLERANCE = 1e-6
@@ -36,9 +36,6 @@ MAX_WHEELS = 16
 #: PD targets and actuators by name
 TARGETS = {"orbital": kc.TARGET_ORBITAL, "inertial": kc.TARGET_INERTIAL, "sun": kc.TARGET_SUN}
 ACTUATORS = ("ideal", "wheels")
-#: torques: N m -> kg km^2 s^-2; dipoles: A m^2 -> the internal 1e-6 A m^2 (m x B in T then
-#: gives kg km^2 s^-2); inertia kg m^2 -> kg km^2
-_N_M = 1e-6
 
 
 def _value(x, unit, name, *, positive=False, nonnegative=False, allow_none=False):
@@ -115,7 +112,7 @@ class ReactionWheel:
     @property
     def inertia(self):
         """Axial moment of the rotor (kg km^2, the internal unit)."""
-        return self.inertia_kg_m2 * 1e-6
+        return U.to_kernel(self.inertia_kg_m2, "inertia")
 
     def describe(self):
         return {"axis": self.axis.tolist(), "inertia_kg_m2": self.inertia_kg_m2, "speed_rad_s": self.speed_rad_s,
@@ -141,7 +138,7 @@ def wheels_row(wheels):
     inf = np.inf
     return (km.WHEELS, kc.wheel_params(
         [w.axis for w in wheels], [w.inertia for w in wheels],
-        [inf if w.max_torque_n_m is None else w.max_torque_n_m * _N_M for w in wheels],
+        [inf if w.max_torque_n_m is None else U.to_kernel(w.max_torque_n_m, "torque") for w in wheels],
         [inf if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels]), None)
 
 
@@ -173,10 +170,8 @@ class PDControl:
         The unit body axis to point at the Sun (``target = "sun"``, required).
     """
 
+    #: the law's name; its ``[control]`` keys are described once in :data:`orbatt.laws.LAWS`
     law = "pd"
-    #: the ``[control]`` keys of the law (besides ``law``) -> SI unit (None: plain or a name)
-    UNITS = {"target": None, "target_q": None, "target_axis": None, "kp": "N m", "kd": "N m s", "max_torque": "N m",
-             "actuator": None}
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
                  target_axis=None):
@@ -209,12 +204,13 @@ class PDControl:
     def row(self, wheels, sun_table=None):
         """The :data:`~orbatt.core.model.PD_CONTROL` row for a body with ``wheels`` (internal
         units); ``sun_table``: the Sun's position along the orbit (``target = sun``)."""
-        tmax = np.inf if self.max_torque is None else self.max_torque * _N_M
+        tmax = np.inf if self.max_torque is None else U.to_kernel(self.max_torque, "torque")
         values = (self.target_axis if self.target == "sun" else
                   self.target_q if self.target_q is not None else (1.0, 0.0, 0.0, 0.0))
         self.check_wheels(wheels)
         axes = np.array([w.axis for w in wheels]) if self.actuator == "wheels" else None
-        params = kc.pd_params(TARGETS[self.target], self.kp * _N_M, self.kd * _N_M, tmax, values, axes)
+        params = kc.pd_params(TARGETS[self.target], U.to_kernel(self.kp, "torque"),
+                              U.to_kernel(self.kd, "torque_time"), tmax, values, axes)
         return (km.PD_CONTROL, params, sun_table)
 
     def check_wheels(self, wheels):
@@ -230,8 +226,8 @@ class PDControl:
                              "three dimensions, which leaves an axis uncontrollable; add or tilt a wheel")
 
     def settings(self):
-        """The plain settings (``law`` and the :data:`UNITS` keys, SI floats) that
-        :func:`control_law` makes this law of again."""
+        """The plain settings (``law`` and its keys, SI floats) that
+        :func:`orbatt.laws.control_law` makes this law of again."""
         return {"law": self.law, "target": self.target, "kp": self.kp, "kd": self.kd, "max_torque": self.max_torque,
                 "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
                 "target_axis": None if self.target_axis is None else self.target_axis.tolist()}
@@ -280,9 +276,8 @@ class BDotControl:
         The magnetorquers' limit per axis.
     """
 
+    #: the law's name; its ``[control]`` keys are described once in :data:`orbatt.laws.LAWS`
     law = "bdot"
-    #: the ``[control]`` keys of the law (besides ``law``) -> SI unit
-    UNITS = {"gain": "A m2 s / T", "max_dipole": "A m2"}
 
     def __init__(self, gain, max_dipole):
         self.gain = _value(gain, u.A * u.m**2 * u.s / u.T, "gain", nonnegative=True)
@@ -291,13 +286,14 @@ class BDotControl:
     def row(self, field_table):
         """The :data:`~orbatt.core.model.BDOT_CONTROL` row with the field along the orbit
         (T, inertial; a piece table of :mod:`orbatt.core.environment`)."""
-        return (km.BDOT_CONTROL, [self.gain * _N_M, self.max_dipole * _N_M], field_table)
+        return (km.BDOT_CONTROL, kc.bdot_params(U.to_kernel(self.gain, "dipole_gain"),
+                                                U.to_kernel(self.max_dipole, "dipole")), field_table)
 
     def check_wheels(self, wheels):
         """Nothing to refuse: the magnetorquers act whatever the wheels."""
 
     def settings(self):
-        """The plain settings that :func:`control_law` makes this law of again."""
+        """The plain settings that :func:`orbatt.laws.control_law` makes this law of again."""
         return {"law": self.law, "gain": self.gain, "max_dipole": self.max_dipole}
 
     #: B-dot reads the magnetic field along the orbit
@@ -315,29 +311,10 @@ class BDotControl:
         return f"BDotControl(gain={self.gain:.4g} A m^2 s/T, max_dipole={self.max_dipole:.4g} A m^2)"
 
 
-#: the control laws by name (``[control] law``; each class's ``UNITS`` are its keys)
-LAWS = {cls.law: cls for cls in (PDControl, BDotControl)}
-
-
 def _arguments(units, settings):
     """Keyword arguments of plain ``settings``: each value with a unit in ``units`` as a
     Quantity (None stays None)."""
     return {k: v if units[k] is None or v is None else v * u.Unit(units[k]) for k, v in settings.items()}
-
-
-def control_law(settings):
-    """The law of plain ``settings`` (``{"law": name, key: value}``, SI floats in the law's
-    ``UNITS``; :meth:`PDControl.settings`): a :class:`PDControl` or :class:`BDotControl`, whose
-    constructor checks every rule (:class:`~orbatt.errors.InputError` naming the key)."""
-    settings = dict(settings)
-    name = settings.pop("law", None)
-    if name not in LAWS:
-        raise InputError(f"law: {name!r} is not one of {', '.join(map(repr, LAWS))}")
-    cls = LAWS[name]
-    unknown = sorted(set(settings) - set(cls.UNITS))
-    if unknown:
-        raise InputError(f"{unknown[0]}: not read by law = {name!r}; its keys: {', '.join(cls.UNITS)}")
-    return cls(**_arguments(cls.UNITS, settings))
 
 
 def reaction_wheel(settings, name=None):

@@ -24,7 +24,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .control import LAWS, wheels_row
+from .control import wheels_row
+from .laws import LAW_CLASSES
 from .core import model as km
 from .errors import InputError
 
@@ -74,14 +75,14 @@ def control_of(potential, control=None):
     Raises
     ------
     InputError
-        ``control`` is not a control law (:data:`orbatt.control.LAWS`), or both the argument
+        ``control`` is not a control law (:data:`orbatt.laws.LAWS`), or both the argument
         and the potential hold one.
     """
     carried = getattr(potential, "control", None)
     if control is None:
         return carried
-    if not isinstance(control, tuple(LAWS.values())):
-        raise InputError(f"control: expected one of {', '.join(c.__name__ for c in LAWS.values())}, got "
+    if not isinstance(control, LAW_CLASSES):
+        raise InputError(f"control: expected one of {', '.join(c.__name__ for c in LAW_CLASSES)}, got "
                          f"{type(control).__name__}")
     if carried is not None and carried is not control:
         raise InputError(f"control: the potential already carries a control law ({carried!r}); give the law once, "

@@ -40,14 +40,13 @@ from .core.kinds import BY_CODE, TermKind
 from .environment import sun as esun
 from .environment.atmosphere import ExponentialAtmosphere
 from .environment.frames import EARTH_ROTATION_RATE, R_EARTH_WGS84
+from .units import from_kernel, to_kernel
 
 __all__ = ["TomlKey", "FieldVar", "Term", "TERMS", "BY_KEY", "FIELD_VARIABLES", "SHADOW_CODES", "torque_key_docs",
            "torque_ranges"]
 
 #: the SRP term's shadow models by name (``[environment] shadow``)
 SHADOW_CODES = {"none": km.SHADOW_NONE, "cylindrical": km.SHADOW_CYLINDRICAL, "conical": km.SHADOW_CONICAL}
-#: N m -> kg km^2 s^-2 (the internal torque unit); also A m^2 -> the internal dipole unit
-_N_M = 1e-6
 
 
 @dataclass(frozen=True)
@@ -135,7 +134,7 @@ def _drag_row(tq):
     omega = EARTH_ROTATION_RATE if tq.corotation else 0.0
     if isinstance(tq.atmosphere, ExponentialAtmosphere):  # closed form in the kernel (issue 25), no table
         rho0, h0, H, R = tq.atmosphere.kernel_params()
-        return (km.DRAG, km.drag_params(F, omega, (rho0 * 1e9, h0, H, R)), None)  # kg km^-3, km
+        return (km.DRAG, km.drag_params(F, omega, (to_kernel(rho0, "density"), h0, H, R)), None)  # kg km^-3, km
     return (km.DRAG, km.drag_params(F, omega), tq.field_table("density"))
 
 
@@ -148,11 +147,11 @@ def _srp_row(tq):
 
 def _magnetic_row(tq):
     field = tq.field_table("field")
-    return (km.MAGNETIC, tq.residual_dipole * _N_M, field)
+    return (km.MAGNETIC, to_kernel(tq.residual_dipole, "dipole"), field)
 
 
 def _constant_row(tq):
-    return (km.CONSTANT_TORQUE, tq.constant_torque * _N_M, None)
+    return (km.CONSTANT_TORQUE, to_kernel(tq.constant_torque, "torque"), None)
 
 
 def _table_values(tabs, name, t, width):
@@ -161,7 +160,7 @@ def _table_values(tabs, name, t, width):
 
 def _drag_fields(tq, t, pos, time, tabs):
     if "density" in tabs:
-        return {"density": _table_values(tabs, "density", t, 1)[:, 0] * 1e-9}
+        return {"density": from_kernel(_table_values(tabs, "density", t, 1)[:, 0], "density")}
     return {"density": np.asarray(tq.atmosphere.density(time, pos), dtype=np.float64)}
 
 

@@ -103,6 +103,40 @@ for _kind in OUTPUT_SCALE:
 del _kind, _spelling
 
 
+#: the kernels' units against SI, by quantity (issue 32): ``kind -> (SI unit, SI -> kernel
+#: factor, kernel -> SI factor)``, the one place the 1e+-6 of kg km^2 against kg m^2 is written.
+#: The kernels run in kg, km, s: a torque in kg km^2 s^-2 = 1e6 N m; a magnetic dipole in
+#: 1e-6 A m^2, so that ``m x B`` with ``B`` in T is such a torque; a density in kg km^-3. The
+#: two factors are written both ways (not one as the other's reciprocal) so that values
+#: convert with the exact operations they always did, bit for bit.
+KERNEL_UNITS = {
+    "torque": ("N m", 1e-6, 1e6),
+    "torque_time": ("N m s", 1e-6, 1e6),
+    "dipole": ("A m2", 1e-6, 1e6),
+    "dipole_gain": ("A m2 s / T", 1e-6, 1e6),
+    "inertia": ("kg m2", 1e-6, 1e6),
+    "momentum": ("kg m2 / s", 1e-6, 1e6),
+    "density": ("kg m-3", 1e9, 1e-9),
+}
+
+
+def to_kernel(values, kind):
+    """SI ``values`` of quantity ``kind`` (:data:`KERNEL_UNITS`) in the kernels' unit: a float
+    for a float, an array for an array-like (a new array); None stays None."""
+    if values is None:
+        return None
+    factor = KERNEL_UNITS[kind][1]
+    return values * factor if isinstance(values, float) else np.multiply(values, factor)
+
+
+def from_kernel(values, kind):
+    """Kernel ``values`` of quantity ``kind`` (:data:`KERNEL_UNITS`) in SI (its first column)."""
+    if values is None:
+        return None
+    factor = KERNEL_UNITS[kind][2]
+    return values * factor if isinstance(values, float) else np.multiply(values, factor)
+
+
 def to_output(values, kind, dimensionless=False):
     """Values of quantity kind ``kind`` in internal units as written (SI for the attitude
     family, :data:`OUTPUT_SCALE`).

@@ -13,7 +13,8 @@ from astropy.time import Time
 
 import orbatt
 from orbatt import terms
-from orbatt.control import LAWS, control_law, reaction_wheel, wheels_row
+from orbatt.control import reaction_wheel, wheels_row
+from orbatt.laws import LAWS, control_law
 from orbatt.core import kinds
 from orbatt.core import model as km
 from orbatt.environment.atmosphere import PiecewiseExponentialAtmosphere
@@ -21,7 +22,6 @@ from orbatt.environment.magnetic import DipoleField
 from orbatt.errors import InputError
 from orbatt.model_assembly import assemble, model_rows
 from orbatt.scenario import parse
-from orbatt.scenario.control_schema import LAW_PARSERS
 from orbatt.scenario.ranges import RANGES
 from orbatt.scenario.schema import KEY_DOCS
 from orbatt.scenario.torques_schema import TORQUE_KEYS, torque_arguments
@@ -135,7 +135,9 @@ def test_a_scenario_holds_plain_settings_and_the_objects_check_them():
     law = control_law(spec.control["control"])
     assert isinstance(law, orbatt.PDControl) and law.settings() == spec.control["control"]
     assert [reaction_wheel(w).settings() for w in spec.control["wheels"]] == spec.control["wheels"]
-    assert set(LAW_PARSERS) == set(LAWS)  # every law has its scenario keys' parser
+    for name, law in LAWS.items():  # every law's keys are its class's keywords and its settings' keys
+        assert law.cls.law == name
+        assert set(law.units) <= set(inspect.signature(law.cls).parameters)
     with pytest.raises(InputError, match=r"^law: 'lqr'"):
         control_law({"law": "lqr", "kp": 1.0})
     with pytest.raises(InputError, match=r"^kp: not read by law = 'bdot'"):

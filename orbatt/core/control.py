@@ -6,15 +6,19 @@ torque). Vectors are 3-tuples in **body axes** unless named ``_s`` (inertial).
 
 Parameter layouts (rows of the term list, :mod:`orbatt.core.model`)
 ----------------------------------------------------------------
-* reaction wheels (:data:`~orbatt.core.model.WHEELS`): :func:`wheel_params`:
-  ``[n, (a1, a2, a3, Iw, u_max, speed_max) * n]``: unit spin axis, axial moment of the rotor,
-  motor torque limit and speed limit (relative to the body; ``inf``: none).
-* PD control (:data:`~orbatt.core.model.PD_CONTROL`): :func:`pd_params`:
-  ``[target, kp, kd, tau_max, actuator, c0, c1, c2, c3, then for wheels the (n, 3)
-  pseudo-inverse of the (3, n) matrix of spin axes]``; ``c`` is the target quaternion
-  (``target = inertial``: target -> S; ``target = orbital``: target -> O, identity by
-  default) or the body axis to point at the Sun (``target = sun``).
-* B-dot (:data:`~orbatt.core.model.BDOT_CONTROL`): ``[gain, m_max]``.
+Each layout is named once (:class:`~orbatt.core.slots.Slots`), shared by the packer and the
+kernels (which take the offsets as folded constants):
+
+* reaction wheels (:data:`~orbatt.core.model.WHEELS`): :func:`wheel_params`: ``[n]`` then
+  :data:`WHEEL` per wheel: unit spin ``axis``, axial moment of the rotor ``iw``, motor torque
+  limit ``u_max`` and speed limit ``speed_max`` (relative to the body; ``inf``: none).
+* PD control (:data:`~orbatt.core.model.PD_CONTROL`): :func:`pd_params`, :data:`PD`:
+  ``target, kp, kd, max_torque, actuator, c (4)``, then for wheels the tail ``pinv``: the
+  ``(n, 3)`` pseudo-inverse of the ``(3, n)`` matrix of spin axes; ``c`` is the target
+  quaternion (``target = inertial``: target -> S; ``target = orbital``: target -> O, identity
+  by default) or the body axis to point at the Sun (``target = sun``).
+* B-dot (:data:`~orbatt.core.model.BDOT_CONTROL`): :func:`bdot_params`, :data:`BDOT`:
+  ``gain, max_dipole``.
 
 The PD law (``q_e = q_t~ q``, ``tau = -kp sgn(q_e0) Im(q_e) - kd (omega - omega_t)``, each
 axis clipped to ``tau_max``) with the targets:
@@ -42,14 +46,25 @@ import numpy as np
 
 from ._jit import jit_inline
 from .qalg import cross, qconj, qmul, rotate_inv
+from .slots import Slots
 
 #: PD targets
 TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN = 0, 1, 2
 #: actuators of the PD law
 ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
-#: parameters of a wheel and of the PD law before the wheels' pseudo-inverse
-WHEEL_SIZE = 6
-PD_HEADER = 9
+#: the parameter layouts (module docstring): one wheel, the PD law, B-dot
+WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1))
+PD = Slots(("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4), tail="pinv")
+BDOT = Slots(("gain", 1), ("max_dipole", 1))
+#: the floats of one wheel, and of the PD law before the wheels' pseudo-inverse
+WHEEL_SIZE = WHEEL.size
+PD_HEADER = PD.size
+# the slot offsets as module constants: numba folds them into the kernels as literals
+_W_AXIS, _W_IW, _W_UMAX, _W_SMAX = WHEEL.axis, WHEEL.iw, WHEEL.u_max, WHEEL.speed_max
+_PD_TARGET, _PD_KP, _PD_KD, _PD_TMAX, _PD_C, _PD_PINV = PD.target, PD.kp, PD.kd, PD.max_torque, PD.c, PD.pinv
+#: the slot of the PD law's actuator (``params[p0 + PD_ACTUATOR]``)
+PD_ACTUATOR = PD.actuator
+_BD_GAIN, _BD_MMAX = BDOT.gain, BDOT.max_dipole
 
 
 def wheel_params(axes, inertia, max_torque, max_speed):
@@ -57,10 +72,11 @@ def wheel_params(axes, inertia, max_torque, max_speed):
     (body), axial moments ``(n,)``, motor torque limits and speed limits ``(n,)`` (``inf``:
     none)."""
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 3)
-    cols = [axes, np.asarray(inertia, dtype=np.float64).reshape(-1, 1),
-            np.asarray(max_torque, dtype=np.float64).reshape(-1, 1),
-            np.asarray(max_speed, dtype=np.float64).reshape(-1, 1)]
-    return np.concatenate([[axes.shape[0]], np.hstack(cols).ravel()])
+    n = axes.shape[0]
+    iw, um, sm = (np.broadcast_to(np.asarray(x, dtype=np.float64).ravel(), (n,)) for x in (inertia, max_torque,
+                                                                                           max_speed))
+    rows = [WHEEL.pack(axis=axes[k], iw=iw[k], u_max=um[k], speed_max=sm[k]) for k in range(n)]
+    return np.concatenate([[float(n)], *rows])
 
 
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None):
@@ -74,13 +90,19 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     c[:tv.size] = tv
     if target != TARGET_SUN and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
         raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
-    head = [float(target), kp, kd, max_torque, ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, *c]
+    head = dict(target=float(target), kp=kp, kd=kd, max_torque=max_torque,
+                actuator=ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, c=c)
     if wheel_axes is None:
-        return np.array(head, dtype=np.float64)
+        return PD.pack(**head)
     A = np.asarray(wheel_axes, dtype=np.float64).reshape(-1, 3).T  # (3, n)
     if np.linalg.matrix_rank(A) < 3:
         raise ValueError("the wheels' spin axes do not span three dimensions")
-    return np.concatenate([head, np.linalg.pinv(A).ravel()])
+    return PD.pack(tail=np.linalg.pinv(A), **head)
+
+
+def bdot_params(gain, max_dipole):
+    """The parameters of a :data:`~orbatt.core.model.BDOT_CONTROL` row (:data:`BDOT`)."""
+    return BDOT.pack(gain=gain, max_dipole=max_dipole)
 
 
 @jit_inline
@@ -151,10 +173,11 @@ def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
     """The PD law's commanded torque (body axes, each axis clipped) for the attitude ``q`` and
     body rate ``omega``; the orbit's ``r, xhat, v`` and the Sun's position ``sun_s`` (inertial)
     serve the orbital and Sun targets."""
-    target = params[p0]
-    kp = params[p0 + 1]
-    kd = params[p0 + 2]
-    tmax = params[p0 + 3]
+    target = params[p0 + _PD_TARGET]
+    kp = params[p0 + _PD_KP]
+    kd = params[p0 + _PD_KD]
+    tmax = params[p0 + _PD_TMAX]
+    c = p0 + _PD_C
     wt = (0.0, 0.0, 0.0)
     if target == TARGET_SUN:
         dx = sun_s[0] - r * xhat[0]
@@ -162,14 +185,14 @@ def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
         dz = sun_s[2] - r * xhat[2]
         d = math.sqrt(dx * dx + dy * dy + dz * dz)
         s_b = rotate_inv(q, (dx / d, dy / d, dz / d))
-        qe = pointing_error(s_b, (params[p0 + 5], params[p0 + 6], params[p0 + 7]))
+        qe = pointing_error(s_b, (params[c], params[c + 1], params[c + 2]))
     else:
         if target == TARGET_ORBITAL:  # the frame O turned by the constant offset c (O -> target)
             p, wt_s = orbital_target(r, xhat, v)
-            qt = qmul(p, (params[p0 + 5], params[p0 + 6], params[p0 + 7], params[p0 + 8]))
+            qt = qmul(p, (params[c], params[c + 1], params[c + 2], params[c + 3]))
             wt = rotate_inv(q, wt_s)
         else:
-            qt = (params[p0 + 5], params[p0 + 6], params[p0 + 7], params[p0 + 8])
+            qt = (params[c], params[c + 1], params[c + 2], params[c + 3])
         qe = qmul(qconj(qt), q)
     sg = 1.0 if qe[0] >= 0.0 else -1.0
     return (clip(-kp * sg * qe[1] - kd * (omega[0] - wt[0]), tmax),
@@ -182,17 +205,18 @@ def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
     """Make the body torque ``tau`` with the wheels: the motor torques ``u`` (written; one per
     wheel, clipped to the motor and speed limits) and the torque the body feels, ``-A u``
     (returned). ``y[8 + k]`` is wheel ``k``'s axial momentum; the pseudo-inverse is in the PD
-    row from ``params[pd0 + PD_HEADER]``, the wheels from ``params[wheels0]``."""
+    row's tail (:data:`PD` ``pinv``), the wheels from ``params[wheels0]``."""
     nw = u.shape[0]
     tb = (0.0, 0.0, 0.0)
     for k in range(nw):
-        pk = pd0 + PD_HEADER + 3 * k
+        pk = pd0 + _PD_PINV + 3 * k
         uk = -(params[pk] * tau[0] + params[pk + 1] * tau[1] + params[pk + 2] * tau[2])
         w = wheels0 + 1 + WHEEL_SIZE * k
-        a = (params[w], params[w + 1], params[w + 2])
-        uk = clip(uk, params[w + 4])
-        speed = y[8 + k] / params[w + 3] - (a[0] * omega[0] + a[1] * omega[1] + a[2] * omega[2])
-        if (speed >= params[w + 5] and uk > 0.0) or (speed <= -params[w + 5] and uk < 0.0):
+        a = (params[w + _W_AXIS], params[w + _W_AXIS + 1], params[w + _W_AXIS + 2])
+        uk = clip(uk, params[w + _W_UMAX])
+        speed = y[8 + k] / params[w + _W_IW] - (a[0] * omega[0] + a[1] * omega[1] + a[2] * omega[2])
+        smax = params[w + _W_SMAX]
+        if (speed >= smax and uk > 0.0) or (speed <= -smax and uk < 0.0):
             uk = 0.0
         u[k] = uk
         tb = (tb[0] - uk * a[0], tb[1] - uk * a[1], tb[2] - uk * a[2])
@@ -200,9 +224,12 @@ def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
 
 
 @jit_inline
-def bdot_dipole(q, omega, b_s, bdot_s, gain, mmax):
-    """``(m, B_B)``: the B-dot dipole (body axes, each axis clipped to ``mmax``) and the field
-    in body axes, from the field ``b_s`` and its rate ``bdot_s`` along the orbit (inertial)."""
+def bdot_dipole(q, omega, b_s, bdot_s, params, p0):
+    """``(m, B_B)``: the B-dot dipole (body axes, each axis clipped to the row's
+    ``max_dipole``) and the field in body axes, from the field ``b_s`` and its rate ``bdot_s``
+    along the orbit (inertial); the row's parameters at ``params[p0]`` (:data:`BDOT`)."""
+    gain = params[p0 + _BD_GAIN]
+    mmax = params[p0 + _BD_MMAX]
     b = rotate_inv(q, b_s)
     db = rotate_inv(q, bdot_s)
     wb = cross(omega, b)

@@ -27,6 +27,10 @@ from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, or
 from .qalg import qconj, qmul, qmul_pure
 from .torques import gradient_of_torque
 
+# the slot offsets (orbatt.core.control's layouts) as module constants, folded by numba
+_W_AXIS, _W_IW = ctl.WHEEL.axis, ctl.WHEEL.iw
+_PD_ACTUATOR = ctl.PD_ACTUATOR
+
 
 @jit_inline
 def wheel_row(terms):
@@ -49,7 +53,8 @@ def body_rate(g, y, inertia, params, w0):
     h0 = h1 = h2 = 0.0
     for k in range(int(params[w0])):
         w = w0 + 1 + ctl.WHEEL_SIZE * k
-        a0, a1, a2, iw = params[w], params[w + 1], params[w + 2], params[w + 3]
+        a0, a1, a2 = params[w + _W_AXIS], params[w + _W_AXIS + 1], params[w + _W_AXIS + 2]
+        iw = params[w + _W_IW]
         j00 -= iw * a0 * a0
         j11 -= iw * a1 * a1
         j22 -= iw * a2 * a2
@@ -94,7 +99,7 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
                 sun = (s4[0], s4[1], s4[2])
             tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
-            if params[p0 + 4] == ctl.ACTUATOR_WHEELS:
+            if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
                 tb = ctl.wheel_torques(tau, omega, y, params, p0, w0, u)
                 app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
             else:
@@ -102,7 +107,7 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
         elif kind == BDOT_CONTROL:
             b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
-            m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params[p0], params[p0 + 1])
+            m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
             tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
             ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
             app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])

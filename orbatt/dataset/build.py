@@ -61,7 +61,7 @@ from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
 from ..potentials import energy_and_torques, evaluate_members
 from ..terms import FIELD_VARIABLES
-from ..units import DIMENSIONLESS_UNITS, INTERNAL_UNITS, LEGACY_OUTPUT
+from ..units import DIMENSIONLESS_UNITS, INTERNAL_UNITS, LEGACY_OUTPUT, from_kernel
 from ..version import __version__
 from .content import Content, Var
 from .eclipses import eclipse_variables
@@ -512,10 +512,6 @@ def si_form(variables):
     return out
 
 
-#: the torques of a result: kg km^2 s^-2 (the internal energy unit) -> N m
-_TORQUE_TO_N_M = 1e6
-
-
 def _torque_variables(potential, tau, t, tdims):
     """``torque`` (the total) and ``torque_<term>`` of each torque term of ``potential``
     (body axes, N m) from its term torques ``tau`` (``(..., N, terms, 3)``, kg km^2 s^-2; None
@@ -523,7 +519,7 @@ def _torque_variables(potential, tau, t, tdims):
     if tau is None:
         return {}
     names = list(potential.term_names)
-    tau = tau * _TORQUE_TO_N_M
+    tau = from_kernel(tau, "torque")  # kg km^2 s^-2 -> N m
     vv = tdims + ("axis",)
     total = tau[..., 0, :].copy()
     for k in range(1, len(names)):

@@ -14,12 +14,11 @@ from ..core import kernel_floats
 from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
+from ..laws import law_of
+from ..units import from_kernel
 from .content import Var
 
-__all__ = ["control_variables", "wheel_coordinates", "TORQUE_TO_N_M"]
-
-#: kg km^2 s^-2 (the internal torque unit) -> N m; 1e-6 A m^2 (the internal dipole) -> A m^2
-TORQUE_TO_N_M = 1e6
+__all__ = ["control_variables", "wheel_coordinates"]
 
 
 def _var(dims, data, units, long_name, **extra):
@@ -97,17 +96,17 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
                                       comment="h_k = Iw_k (a_k.omega + speed_k), absolute")
         data["wheel_speed"] = _var(wv, hw / iw - np.einsum("...i,ki->...k", omega, axes), units["rate"],
                                    "speed of each reaction wheel relative to the body")
-        data["wheel_torque"] = _var(wv, u * TORQUE_TO_N_M, "N m", "motor torque of each reaction wheel",
+        data["wheel_torque"] = _var(wv, from_kernel(u, "torque"), "N m", "motor torque of each reaction wheel",
                                     comment="dh_k/dt; the body feels -u_k a_k")
     if control is not None:
-        data["torque_control"] = _var(vv, tau * TORQUE_TO_N_M, "N m",
+        data["torque_control"] = _var(vv, from_kernel(tau, "torque"), "N m",
                                       "torque the attitude control applies to the body (body components)", frame="B",
                                       control_law=control.law,
                                       comment=("reaction of the wheels' motors (internal)" if
                                                getattr(control, "actuator", "") == "wheels" else "external torque"))
-        if control.law == "bdot":
-            data["dipole_control"] = _var(vv, m * TORQUE_TO_N_M, "A m^2", "B-dot magnetic dipole (body components)",
-                                          frame="B")
+        outputs = {"dipole": m}  # the kernel's outputs a law may write (orbatt.laws.LawVar.values)
+        for var in law_of(control).variables:
+            data[var.name] = _var(vv, from_kernel(outputs[var.values], var.kind), var.unit, var.long_name, frame="B")
     return data
 
 

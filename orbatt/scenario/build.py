@@ -15,7 +15,7 @@ from astropy import units as u
 
 from .. import quaternion as qt
 from .. import units as U
-from ..control import control_law
+from ..laws import control_law
 from ..errors import InputError, IntegrationError, ScenarioError
 from ..methods.problem import DEFAULT_MAX_STEPS
 from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit

@@ -29,26 +29,18 @@ from __future__ import annotations
 
 from astropy import units as u
 
-from ..control import ACTUATORS, LAWS, TARGETS, control_law, reaction_wheel
+from ..control import reaction_wheel
 from ..errors import InputError
+from ..laws import CONTROL_KEYS, LAWS, control_law
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
 from .ranges import RANGES
 from .torques_schema import check_field_epoch
 
-__all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "LAW_PARSERS", "parse_control"]
+__all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "parse_control"]
 
-#: the [control] keys: law and the keys of every law (orbatt.control.LAWS)
-CONTROL_KEYS = {"law"}.union(*(cls.UNITS for cls in LAWS.values()))
 WHEEL_KEYS = {"axis", "inertia", "speed", "max_torque", "max_speed"}
 RATE = u.rad / u.s
-
-
-def _nonnegative(ctx, where, raw, unit, key):
-    v = parse_quantity(ctx, where, raw, unit, dimensionless=False, bounds=RANGES[key])
-    if v < 0:
-        raise ctx.error(where, f"{raw!r} must not be negative")
-    return v
 
 
 def _positive(ctx, where, raw, unit, key):
@@ -98,7 +90,7 @@ def _wheels(ctx, raw):
 
 
 def _checked(ctx, settings, wheels):
-    """``settings`` of a law, checked by its object (:func:`~orbatt.control.control_law`, then
+    """``settings`` of a law, checked by its object (:func:`~orbatt.laws.control_law`, then
     its actuator against the ``wheels``' settings), the key named."""
     try:
         control_law(settings).check_wheels([reaction_wheel(w) for w in wheels])
@@ -107,62 +99,61 @@ def _checked(ctx, settings, wheels):
     return settings
 
 
-def _pd(ctx, c, data, orbit, wheels):
-    """The PD law's settings (SI floats) of ``[control]`` ``c``; the rules of the law itself
-    are :class:`~orbatt.control.PDControl`'s."""
-    for key in ("kp", "kd"):
-        if key not in c:
-            raise ctx.error(f"[control] {key}", "missing; the PD law needs kp and kd")
-    out = {"law": "pd",
-           "target": parse_choice(ctx, "[control] target", c.get("target", "orbital"), tuple(TARGETS)),
-           "actuator": parse_choice(ctx, "[control] actuator", c.get("actuator", "ideal"), ACTUATORS),
-           "kp": _nonnegative(ctx, "[control] kp", c["kp"], u.N * u.m, ("control", "kp")),
-           "kd": _nonnegative(ctx, "[control] kd", c["kd"], u.N * u.m * u.s, ("control", "kd")),
-           "max_torque": (_positive(ctx, "[control] max_torque", c["max_torque"], u.N * u.m,
-                                    ("control", "max_torque")) if "max_torque" in c else None)}
-    for key, n in (("target_q", 4), ("target_axis", 3)):
-        out[key] = parse_plain_vector(ctx, f"[control] {key}", c[key], n).tolist() if key in c else None
-    _checked(ctx, out, wheels)
-    if out["target"] == "sun" and orbit.get("epoch") is None:
+def _law_settings(ctx, law, c):
+    """The settings (SI floats) of ``[control]`` ``c`` for ``law`` (:class:`orbatt.laws.Law`),
+    each key parsed and checked as its :class:`~orbatt.laws.LawKey` says."""
+    missing = [k for k in law.required if k not in c]
+    if missing:
+        raise ctx.error(f"[control] {missing[0]}", f"missing; {law.title} needs {' and '.join(law.required)}")
+    out = {"law": law.name}
+    for k in law.keys:
+        where = f"[control] {k.key}"
+        if k.key not in c:
+            out[k.key] = k.fallback
+        elif k.kind == "choice":
+            out[k.key] = parse_choice(ctx, where, c[k.key], k.choices)
+        elif k.kind == "vector":
+            out[k.key] = parse_plain_vector(ctx, where, c[k.key], k.size).tolist()
+        else:
+            v = parse_quantity(ctx, where, c[k.key], u.Unit(k.unit), dimensionless=False,
+                               bounds=RANGES["control", k.key])
+            if k.sign == "nonnegative" and v < 0:
+                raise ctx.error(where, f"{c[k.key]!r} must not be negative")
+            if k.sign == "positive" and not v > 0:
+                raise ctx.error(where, f"{c[k.key]!r} must be positive")
+            out[k.key] = v
+    return out
+
+
+def _law_fields(ctx, law, settings, data, orbit):
+    """The magnetic field model the law reads (``"igrf"`` or ``"dipole"``, or None), after
+    checking that what it reads along the orbit can be had: the Sun needs the epoch; the field
+    needs ``[environment] magnetic_field`` and an epoch it covers."""
+    fields = law.fields(settings)
+    if "sun" in fields and orbit.get("epoch") is None:
         raise ctx.error("[orbit] epoch", "missing; target = 'sun' needs the date to place the Sun (give [orbit] epoch)")
-    return out, None
-
-
-def _bdot(ctx, c, data, orbit, wheels):
-    """B-dot's settings (SI floats) of ``[control]`` ``c``, and the field it reads
-    (``[environment] magnetic_field``, checked against the epoch: ``"igrf"`` or ``"dipole"``)."""
-    for key in ("gain", "max_dipole"):
-        if key not in c:
-            raise ctx.error(f"[control] {key}", "missing; B-dot needs gain and max_dipole")
-    out = {"law": "bdot",
-           "gain": _nonnegative(ctx, "[control] gain", c["gain"], u.A * u.m**2 * u.s / u.T, ("control", "gain")),
-           "max_dipole": _positive(ctx, "[control] max_dipole", c["max_dipole"], u.A * u.m**2,
-                                   ("control", "max_dipole"))}
+    if "field" not in fields:
+        return None
     env = data.get("environment", {})
     field = env.get("magnetic_field") if isinstance(env, dict) else None
     if field is None or field == "none":
-        raise ctx.error("[environment] magnetic_field", "missing; B-dot needs a field model: add [environment] "
-                                                        "magnetic_field = 'igrf' or 'dipole'")
+        raise ctx.error("[environment] magnetic_field", f"missing; {law.title} needs a field model: add "
+                                                        "[environment] magnetic_field = 'igrf' or 'dipole'")
     field = parse_choice(ctx, "[environment] magnetic_field", field, ("igrf", "dipole"))
     epoch = orbit.get("epoch")
     if epoch is None:
-        raise ctx.error("[orbit] epoch", f"missing; the {field} field of B-dot needs the date (give [orbit] epoch)")
+        raise ctx.error("[orbit] epoch", f"missing; the {field} field of {law.title} needs the date (give [orbit] "
+                                         "epoch)")
     check_field_epoch(ctx, field, epoch)
-    return _checked(ctx, out, wheels), field
-
-
-#: the parser of each control law's ``[control]`` keys, by ``law`` (the laws of
-#: :data:`orbatt.control.LAWS`; a law without one here is refused naming ``[control] law``):
-#: ``parser(ctx, table, data, orbit, wheels) -> (settings, field the law reads or None)``
-LAW_PARSERS = {"pd": _pd, "bdot": _bdot}
+    return field
 
 
 def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
     """The control settings of a scenario, plain data: a dict of ``wheels`` (each wheel's
     settings, :meth:`~orbatt.control.ReactionWheel.settings`), ``control`` (the law's settings,
-    :meth:`~orbatt.control.PDControl.settings`, or None) and ``magnetic_field`` (``"igrf"``,
+    :meth:`~orbatt.control.PDControl.settings`, or None; keys and rules from :data:`orbatt.laws.LAWS`) and ``magnetic_field`` (``"igrf"``,
     ``"dipole"`` or None: the field B-dot reads); None when the scenario has neither. The
-    objects (:func:`~orbatt.control.reaction_wheel`, :func:`~orbatt.control.control_law`)
+    objects (:func:`~orbatt.control.reaction_wheel`, :func:`~orbatt.laws.control_law`)
     check their rules once; raises :class:`~orbatt.scenario.ScenarioError` naming the key."""
     body = data.get("body", {})
     has_wheels = "wheels" in body
@@ -186,14 +177,15 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
         if key not in CONTROL_KEYS:
             raise ctx.error(f"[control] {key}", f"unknown key; allowed: {', '.join(sorted(CONTROL_KEYS))}")
     if "law" not in c:
-        raise ctx.error("[control] law", f"missing; give law = {' or '.join(map(repr, LAW_PARSERS))}")
-    law = parse_choice(ctx, "[control] law", c["law"], tuple(LAW_PARSERS))
-    allowed = {"law"} | set(LAWS[law].UNITS)
+        raise ctx.error("[control] law", f"missing; give law = {' or '.join(map(repr, LAWS))}")
+    law = LAWS[parse_choice(ctx, "[control] law", c["law"], tuple(LAWS))]
+    allowed = {"law"} | set(law.units)
     for key in c:
         if key not in allowed:
-            raise ctx.error(f"[control] {key}", f"not read by law = {law!r}; remove it")
+            raise ctx.error(f"[control] {key}", f"not read by law = {law.name!r}; remove it")
     if potential_kind != "gravity-gradient" or orbit is None:
         raise ctx.error("[control]", f"control needs an orbit: use [potential] kind = 'gravity-gradient' with an "
                                      f"[orbit] (this scenario is {potential_kind!r})")
-    out["control"], out["magnetic_field"] = LAW_PARSERS[law](ctx, c, data, orbit, wheels)
+    settings = _checked(ctx, _law_settings(ctx, law, c), wheels)
+    out["control"], out["magnetic_field"] = settings, _law_fields(ctx, law, settings, data, orbit)
     return out

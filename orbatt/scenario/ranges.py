@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from astropy import units as u
 
 from .. import units as U
+from ..laws import control_ranges
 from ..terms import torque_ranges
 
 __all__ = ["Range", "RANGES", "key_bounds", "range_text", "ANGLE_LIMIT"]
@@ -89,11 +90,6 @@ RANGES = {
     ("body.wheels", "speed"): Range(None, 1e5, "rpm", signed=True),
     ("body.wheels", "max_torque"): Range(1e-9, 1e4, "N m"),
     ("body.wheels", "max_speed"): Range(1e-6, 1e5, "rpm"),
-    ("control", "kp"): Range(0.0, 1e6, "N m"),
-    ("control", "kd"): Range(0.0, 1e6, "N m s"),
-    ("control", "max_torque"): Range(1e-12, 1e4, "N m"),
-    ("control", "gain"): Range(0.0, 1e12, "A m2 s / T"),
-    ("control", "max_dipole"): Range(1e-9, 1e5, "A m2"),
     ("body.facets", "area"): Range(1e-8, 1e4, "m2"),
     ("body.facets", "position"): Range(None, 1e3, "m", signed=True),
     ("body.facets", "drag_coefficient"): Range(0.0, 10.0),
@@ -114,6 +110,7 @@ RANGES = {
     ("integration", "step"): Range(1e-9, 1e15, "s"),
     # the [torques] keys' ranges: from their descriptors (orbatt.terms)
     **{("torques", key): Range(None, high, unit, signed=True) for key, (high, unit) in torque_ranges().items()},
+    **{("control", key): Range(low, high, unit) for key, (low, high, unit) in control_ranges().items()},
 }
 
 

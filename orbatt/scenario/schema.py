@@ -74,6 +74,7 @@ from ..methods import METHODS
 from ..methods.dop853 import INDEPENDENT_VARIABLES
 from ..methods.problem import MAX_ATOL, MAX_RTOL
 from ..orbits import R_EARTH
+from ..laws import control_key_docs
 from ..terms import torque_key_docs
 
 __all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES",
@@ -121,26 +122,6 @@ inertia     mass x length^2  required  axial moment of the rotor
 speed       angular rate     0         rotor speed relative to the body at the start (`"1000 rpm"`)
 max_torque  torque (N m)     none      motor torque limit
 max_speed   angular rate     none      speed limit: the motor does not push the rotor beyond it
-
-[control]
-law          'pd' | 'bdot'                   required               quaternion PD feedback, or B-dot detumbling with
-                                                                    magnetorquers
-target       'orbital' | 'inertial' | 'sun'  'orbital'              pd: hold the orbital frame (q_orbital -> 1), the
-                                                                    attitude target_q, or point target_axis at the
-                                                                    Sun (needs an epoch: [orbit] epoch or a TLE's)
-target_q     plain, 4 values                 required for inertial  pd: target attitude [w, x, y, z], body ->
-                                                                    inertial; with target = 'orbital' (optional) the
-                                                                    held attitude relative to the orbital frame
-target_axis  plain, 3 values                 required for sun       pd: unit body axis to point at the Sun
-kp           torque (N m)                    required for pd        torque per unit quaternion error
-kd           torque x time (N m s)           required for pd        torque per unit rate error (rad/s)
-max_torque   torque (N m)                    none                   pd: per-axis saturation of the commanded torque
-actuator     'ideal' | 'wheels'              'ideal'                pd: an ideal external torque, or the
-                                                                    [[body.wheels]] (their axes must span 3
-                                                                    dimensions; their limits apply)
-gain         A m2 s / T                      required for bdot      bdot: m = -gain dB/dt (body axes); reads
-                                                                    [environment] magnetic_field
-max_dipole   magnetic moment (A m2)          required for bdot      bdot: per-axis limit of the dipole
 
 [body.facets]
 area              area              required  the plate's area (> 0)
@@ -227,6 +208,7 @@ independent_variable  text       'auto'                          DOP853's variab
 """)
 #: the [torques] keys are described by their terms (orbatt.terms)
 KEY_DOCS["torques"] = torque_key_docs()
+KEY_DOCS["control"] = control_key_docs()
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: central body radii (km) below which an apoapsis is refused
 BODY_RADII = {"earth": R_EARTH}

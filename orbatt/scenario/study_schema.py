@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from .. import units as U
+from ..laws import LAWS, law_of
 from .fields import parse_quantity
 
 __all__ = ["parse_study_keys"]
@@ -17,11 +18,13 @@ def parse_study_keys(ctx, table, spec, *, dimensionless, control=None, wheels=0)
     numbers in normalized units); raise :class:`~orbatt.scenario.ScenarioError` naming
     ``[sweep] key``."""
     outs = set(spec.outputs)
-    law = None if control is None else control["law"]
+    law = law_of(control)
+    dipole_laws = " or ".join(f"{x.title}, law = {x.name!r}" for x in LAWS.values() if x.writes("dipole_control"))
     needs = {"max_wheel_speed": (wheels > 0, "reaction wheels ([[body.wheels]])"),
              "wheel_saturated": (wheels > 0, "reaction wheels ([[body.wheels]])"),
              "max_control_torque": (control is not None, "a [control] law"),
-             "max_dipole": (law == "bdot", "a B-dot [control] law")}
+             "max_dipole": (law is not None and law.writes("dipole_control"),
+                            f"a [control] law with magnetorquers ({dipole_laws})")}
     for name, (ok, what) in needs.items():
         if name in outs and not ok:
             raise ctx.error("[sweep] outputs", f"{name!r} needs {what}; remove it")
@@ -40,7 +43,7 @@ def parse_study_keys(ctx, table, spec, *, dimensionless, control=None, wheels=0)
                                              dimensionless=True)
         if not 0 < spec.settling_angle <= math.pi:
             raise ctx.error("[sweep] settling_angle", f"{table['settling_angle']!r} is outside (0, 180] deg")
-    if "settling_time" in outs and control is not None and control.get("target") == "sun":
+    if "settling_time" in outs and law is not None and "sun" in law.fields(control):
         raise ctx.error("[sweep] outputs", "'settling_time' of a Sun-pointing law is not available yet; use "
                                            "pointing_axis / pointing_reference without the law, or remove it")
     if "window" in table:

@@ -21,7 +21,9 @@ import numpy as np
 
 from ..environment.atmosphere import PiecewiseExponentialAtmosphere
 from ..environment.sun import SRP_FLUX
+from ..laws import law_of
 from ..orbits import R_EARTH
+from ..units import from_kernel
 
 __all__ = ["torque_rates", "B_SURFACE", "RHO_MAX", "NRLMSIS_FACTOR"]
 
@@ -36,7 +38,6 @@ NRLMSIS_FACTOR = 10.0
 _OMEGA_EARTH = 7.2921159e-5
 #: solar radiation pressure at 1 au (N/m^2)
 _P_SUN = SRP_FLUX / 299792458.0
-_KG_KM2 = 1e6  # kg km^2 -> kg m^2
 
 
 def _periapsis(spec):
@@ -107,7 +108,7 @@ def torque_rates(spec):
     """
     if spec.dimensionless or (spec.torques is None and spec.control is None):
         return []
-    inertia = float(np.min(spec.inertia)) * _KG_KM2  # kg m^2
+    inertia = from_kernel(float(np.min(spec.inertia)), "inertia")  # kg m^2
     peri = _periapsis(spec)
     b = B_SURFACE if peri is None else B_SURFACE * min(1.0, (R_EARTH / peri[0]) ** 3)
     torques = []  # (N m, key)
@@ -123,14 +124,8 @@ def torque_rates(spec):
     c = spec.control
     if c is not None:
         law = c["control"]
-        if law is not None and law["law"] == "pd":
-            kp, kd = law["kp"], law["kd"]
-            rates.append((math.sqrt(kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {kp:.3g} N m)"))
-            rates.append((kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {kd:.3g} N m s)"))
-        elif law is not None:
-            gain = law["gain"]
-            rates.append((gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {gain:.3g} "
-                                                                     "A m2 s / T)"))
+        if law is not None:
+            rates += law_of(law).time_scales(law, inertia, b)
         for k, w in enumerate(c["wheels"]):
             speed = max(abs(w["speed"]), w["max_speed"] or 0.0)
             h = w["inertia"] * speed

@@ -1,0 +1,264 @@
+"""The attitude control laws, each described once (issue 32; ``docs/design.md`` §10): what
+a scenario writes, what the law reads, what the kernel gets and what a Dataset records.
+
+A :class:`Law` is to a control law what :class:`orbatt.terms.Term` is to a torque term. It
+holds
+
+* its **scenario keys** in ``[control]`` (:class:`LawKey`: the dimension, default and meaning
+  that ``docs/scenarios.md`` prints, the physical range, how the value is parsed and checked);
+* its API class (:class:`orbatt.PDControl`, :class:`orbatt.BDotControl`), whose keyword
+  arguments the keys are, and which builds the kernel row (``model_row``) with the named
+  parameter slots of :mod:`orbatt.core.control` (:class:`~orbatt.core.slots.Slots`);
+* **what it reads**: the environment fields along the orbit (``"sun"``, ``"field"``), the
+  orbit itself, the wheels (:meth:`Law.fields`, :meth:`Law.reads_orbit`);
+* its **Dataset variables** beyond ``torque_control`` (:class:`LawVar`);
+* its **time scales** (the work estimate of :mod:`orbatt.scenario.work`) and whether it holds
+  a frame (the settling time and the pointing figure read the frame it holds).
+
+Generated from :data:`LAWS`: the ``[control]`` keys, their reference rows and ranges
+(:data:`orbatt.scenario.schema.KEY_DOCS`, :data:`orbatt.scenario.ranges.RANGES`), the parser of
+``[control]`` (:func:`orbatt.scenario.control_schema.parse_control`), the law of plain
+settings (:func:`control_law`), the work estimate's time scales, the study outputs a law
+allows (``max_dipole``), and the law's Dataset variables (:mod:`orbatt.dataset.control`).
+
+Adding a law: its kernel (a function and its :class:`~orbatt.core.slots.Slots` in
+:mod:`orbatt.core.control`, a branch in ``core.gyrostat.control_torques``), its API class
+(:mod:`orbatt.control`) and its :class:`Law` here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from astropy import units as u
+
+from .control import ACTUATORS, TARGETS, BDotControl, PDControl
+from .errors import InputError
+
+__all__ = ["LawKey", "LawVar", "Law", "LAWS", "LAW_CLASSES", "CONTROL_KEYS", "control_law", "law_of",
+           "control_key_docs", "control_ranges"]
+
+
+@dataclass(frozen=True)
+class LawKey:
+    """One key of a law in the scenario's ``[control]`` table.
+
+    Attributes
+    ----------
+    key : str
+        The TOML key (and the API class's keyword).
+    dimension, default, meaning : str
+        The reference's columns (``docs/scenarios.md``).
+    kind : {"quantity", "choice", "vector"}
+        A quantity of ``unit`` within ``range``; one of ``choices``; ``size`` plain numbers.
+    unit : str
+        The quantity's SI unit (the parser's, and the settings'); ``""`` otherwise.
+    range : tuple or None
+        ``(low, high)`` in ``unit`` (:data:`orbatt.scenario.ranges.RANGES`).
+    sign : {"", "nonnegative", "positive"}
+        The rule of a quantity's sign.
+    choices : tuple
+        The names a choice takes.
+    size : int
+        The components of a vector.
+    required : bool
+        The law needs it.
+    fallback : object
+        The setting of an absent key that is not required (a choice's default, or None).
+    """
+
+    key: str
+    dimension: str
+    default: str
+    meaning: str
+    kind: str = "quantity"
+    unit: str = ""
+    range: tuple | None = None
+    sign: str = ""
+    choices: tuple = ()
+    size: int = 0
+    required: bool = False
+    fallback: object = None
+
+
+@dataclass(frozen=True)
+class LawVar:
+    """A Dataset variable a law writes beyond ``torque_control``: ``(time, axis)``, body axes;
+    ``values`` names the kernel output (``"dipole"``) and ``kind`` its
+    :data:`orbatt.units.KERNEL_UNITS` quantity."""
+
+    name: str
+    values: str
+    kind: str
+    unit: str
+    long_name: str
+
+
+@dataclass(frozen=True)
+class Law:
+    """A control law (module docstring).
+
+    Attributes
+    ----------
+    name : str
+        ``[control] law``.
+    title : str
+        In words, for messages ("the PD law").
+    summary : str
+        One line for the reference.
+    cls : type
+        The API class; its keywords are the keys.
+    keys : tuple of LawKey
+    variables : tuple of LawVar
+    fields : callable
+        ``fields(settings) -> tuple``: the environment fields it reads along the orbit
+        (``"sun"``: the Sun's position, needs the epoch; ``"field"``: the magnetic field).
+    holds_frame : callable
+        ``holds_frame(settings) -> bool``: it holds the body on a frame (the orbital frame or an
+        inertial attitude), which the settling time and the pointing figure measure against.
+    time_scales : callable
+        ``time_scales(settings, inertia, b) -> [(rate, key, phrase)]``: its rates (1/s) for the
+        smallest principal moment ``inertia`` (kg m^2) and the field's strength ``b`` (T).
+    reads_orbit : callable
+        ``reads_orbit(settings) -> bool``.
+    """
+
+    name: str
+    title: str
+    summary: str
+    cls: type
+    keys: tuple
+    variables: tuple = ()
+    fields: Callable = lambda s: ()
+    holds_frame: Callable = lambda s: False
+    time_scales: Callable = lambda s, inertia, b: []
+    reads_orbit: Callable = lambda s: True
+
+    @property
+    def units(self):
+        """``{key: SI unit or None}`` of the keys (None: a name or plain numbers)."""
+        return {k.key: (k.unit or None) if k.kind == "quantity" else None for k in self.keys}
+
+    @property
+    def required(self):
+        """The keys the law needs."""
+        return tuple(k.key for k in self.keys if k.required)
+
+    def writes(self, name):
+        """Whether the law writes the Dataset variable ``name`` (``torque_control``: all)."""
+        return name == "torque_control" or any(v.name == name for v in self.variables)
+
+
+def _pd_fields(s):
+    return ("sun",) if s.get("target") == "sun" else ()
+
+
+def _pd_scales(s, inertia, b):
+    kp, kd = s["kp"], s["kd"]
+    return [(math.sqrt(kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {kp:.3g} N m)"),
+            (kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {kd:.3g} N m s)")]
+
+
+def _bdot_scales(s, inertia, b):
+    gain = s["gain"]
+    return [(gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {gain:.3g} A m2 s/T)")]
+
+
+PD = Law(
+    "pd", "the PD law", "quaternion PD feedback", PDControl,
+    (LawKey("target", " | ".join(map(repr, TARGETS)), "'orbital'",
+            "hold the orbital frame (q_orbital -> 1), the attitude target_q, or point target_axis at the Sun (needs an "
+            "epoch: [orbit] epoch or a TLE's)", "choice", choices=tuple(TARGETS), fallback="orbital"),
+     LawKey("actuator", " | ".join(map(repr, ACTUATORS)), "'ideal'",
+            "an ideal external torque, or the [[body.wheels]] (their axes must span 3 dimensions; their limits apply)",
+            "choice", choices=ACTUATORS, fallback="ideal"),
+     LawKey("kp", "torque (N m)", "required", "torque per unit quaternion error", unit="N m", range=(0.0, 1e6),
+            sign="nonnegative", required=True),
+     LawKey("kd", "torque x time (N m s)", "required", "torque per unit rate error (rad/s)", unit="N m s",
+            range=(0.0, 1e6), sign="nonnegative", required=True),
+     LawKey("max_torque", "torque (N m)", "none", "per-axis saturation of the commanded torque", unit="N m",
+            range=(1e-12, 1e4), sign="positive"),
+     LawKey("target_q", "plain, 4 values", "required for inertial",
+            "target attitude [w, x, y, z], body -> inertial; with target = 'orbital' (optional) the held attitude "
+            "relative to the orbital frame", "vector", size=4),
+     LawKey("target_axis", "plain, 3 values", "required for sun", "unit body axis to point at the Sun", "vector",
+            size=3)),
+    fields=_pd_fields, holds_frame=lambda s: s.get("target") in ("orbital", "inertial"), time_scales=_pd_scales,
+    reads_orbit=lambda s: s.get("target") != "inertial")
+
+BDOT = Law(
+    "bdot", "B-dot", "B-dot detumbling with magnetorquers", BDotControl,
+    (LawKey("gain", "A m2 s / T", "required", "m = -gain dB/dt (body axes); reads [environment] magnetic_field",
+            unit="A m2 s / T", range=(0.0, 1e12), sign="nonnegative", required=True),
+     LawKey("max_dipole", "magnetic moment (A m2)", "required", "per-axis limit of the dipole", unit="A m2",
+            range=(1e-9, 1e5), sign="positive", required=True)),
+    variables=(LawVar("dipole_control", "dipole", "dipole", "A m^2", "B-dot magnetic dipole (body components)"),),
+    fields=lambda s: ("field",), time_scales=_bdot_scales)
+
+#: the control laws by name (``[control] law``)
+LAWS = {law.name: law for law in (PD, BDOT)}
+#: the API classes of the laws
+LAW_CLASSES = tuple(law.cls for law in LAWS.values())
+#: the ``[control]`` keys: ``law`` and every law's keys
+CONTROL_KEYS = {"law"}.union(*({k.key for k in law.keys} for law in LAWS.values()))
+
+
+def law_of(settings_or_name):
+    """The :class:`Law` of a law's name, of its plain settings (``{"law": name, ...}``) or of an
+    API law object; None for None."""
+    if settings_or_name is None:
+        return None
+    if isinstance(settings_or_name, dict):
+        settings_or_name = settings_or_name.get("law")
+    name = getattr(settings_or_name, "law", settings_or_name)
+    if name not in LAWS:
+        raise InputError(f"law: {name!r} is not one of {', '.join(map(repr, LAWS))}")
+    return LAWS[name]
+
+
+def control_law(settings):
+    """The law of plain ``settings`` (``{"law": name, key: value}``, SI floats in the units of
+    the law's keys; the ``settings()`` of a law object): a :class:`~orbatt.PDControl` or
+    :class:`~orbatt.BDotControl`, whose constructor checks every rule
+    (:class:`~orbatt.errors.InputError` naming the key)."""
+    settings = dict(settings)
+    law = law_of(settings.pop("law", None))
+    units = law.units
+    unknown = sorted(set(settings) - set(units))
+    if unknown:
+        raise InputError(f"{unknown[0]}: not read by law = {law.name!r}; its keys: {', '.join(units)}")
+    kw = {k: v if units[k] is None or v is None else v * u.Unit(units[k]) for k, v in settings.items()}
+    return law.cls(**kw)
+
+
+def _owners(key):
+    return [law.name for law in LAWS.values() if any(k.key == key for k in law.keys)]
+
+
+def control_key_docs():
+    """The ``[control]`` rows of the reference: ``{key: (dimension, default, meaning)}``, ``law``
+    first, then each law's keys in order (a key of some laws only says whose)."""
+    docs = {"law": (" | ".join(map(repr, LAWS)), "required",
+                    "; ".join(f"{law.name}: {law.summary}" for law in LAWS.values()))}
+    for law in LAWS.values():
+        for k in law.keys:
+            if k.key in docs:
+                continue
+            owners = _owners(k.key)
+            default = f"required for {', '.join(owners)}" if k.default == "required" else k.default
+            docs[k.key] = (k.dimension, default, f"{', '.join(owners)}: {k.meaning}")
+    return docs
+
+
+def control_ranges():
+    """``{key: (low, high, unit)}`` of the laws' quantity keys (one range per key: a key two
+    laws share has one dimension and one range)."""
+    out = {}
+    for law in LAWS.values():
+        for k in law.keys:
+            if k.kind == "quantity" and k.range is not None:
+                if k.key in out and out[k.key] != (*k.range, k.unit):
+                    raise ValueError(f"[control] {k.key}: two laws give it different ranges")
+                out[k.key] = (*k.range, k.unit)
+    return out
