@@ -42,12 +42,17 @@ def split_path(path):
     return steps
 
 
-def resolve(data, path):
+def resolve(data, path, defaults=None):
     """The value at ``path`` in the TOML ``data`` (a dict); LookupError naming the first step
-    that is not there (a missing key, an index past the end, a step into a value)."""
+    that is not there (a missing key, an index past the end, a step into a value).
+
+    ``defaults`` (``{(table, key): leaf}``, ``table`` the path of the key's table without
+    indices, such as ``"body.facets"``) gives the value of a last key that the scenario does
+    not write in a table it has: the key takes its default."""
     node = data
     done = ""
-    for step in split_path(path):
+    steps = split_path(path)
+    for i, step in enumerate(steps):
         where = f"{done}[{step}]" if isinstance(step, int) else (f"{done}.{step}" if done else step)
         if isinstance(step, int):
             if not isinstance(node, list):
@@ -55,6 +60,9 @@ def resolve(data, path):
             if step >= len(node):
                 raise LookupError(f"{done} has {len(node)} entries; [{step}] is past its end")
         elif not isinstance(node, dict) or step not in node:
+            table = ".".join(s for s in steps[:i] if isinstance(s, str))
+            if isinstance(node, dict) and i == len(steps) - 1 and defaults and (table, step) in defaults:
+                return defaults[table, step]
             raise LookupError(f"{where} is not in the scenario")
         node = node[step]
         done = where

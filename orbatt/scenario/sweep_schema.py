@@ -26,7 +26,7 @@ from .ranges import RANGES
 __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "DEFAULT_OUTPUTS", "DISTRIBUTIONS",
            "SWEEP_KEYS", "SWEEP_KEY_DOCS", "INERTIA_PARAMETERS", "RATE_PARAMETERS", "ORBIT_PARAMETERS", "parse_sweep_table",
            "parameter_unit", "parameter_units", "in_limits", "limits_text", "PATH_PARAMETER", "definition", "path_unit", "sweep_units",
-           "FIXED_TABLES", "MAX_GRID_VALUES"]
+           "FIXED_TABLES", "MAX_GRID_VALUES", "DEFAULT_LEAVES"]
 
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
@@ -298,6 +298,12 @@ def _check_apoapsis(ctx, params, orbit, radius):
                                         f"central body (radius {radius:.6g} km); raise low")
 
 
+#: the value a numeric key takes when the scenario does not write it, as a TOML leaf, by its
+#: table's path without indices and its name (``KEY_DOCS``' numeric defaults): a swept path may
+#: name such a key, its nominal value being the default
+DEFAULT_LEAVES = {("body.facets", "drag_coefficient"): 2.2, ("body.facets", "specular"): 0.0,
+                  ("body.facets", "diffuse"): 0.0, ("body.wheels", "speed"): "0.0 rad / s"}
+
 #: tables whose keys a sweep does not vary: the output times and the method are shared by all cases
 FIXED_TABLES = ("sweep", "integration", "name", "description")
 
@@ -316,7 +322,7 @@ def path_unit(ctx, path, data):
         raise ctx.error(where, f"[{steps[0]}] is shared by all cases (the output times and the method); vary the keys "
                                "of [body], [initial], [orbit], [control], [torques], [environment], [primary]")
     try:
-        leaf = resolve(data or {}, path)
+        leaf = resolve(data or {}, path, DEFAULT_LEAVES)
     except LookupError as exc:
         raise ctx.error(where, f"{exc}; give the path of a key the scenario has") from None
     if isinstance(steps[-1], str) and steps[-1] == "epoch" or (isinstance(leaf, str) and re.match(r"^\s*\d{4}-", leaf)):

@@ -373,7 +373,8 @@ def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, 
         h = None if W is None else np.ascontiguousarray(W[j])
         qj, Qj = np.ascontiguousarray(q[j]), np.ascontiguousarray(Q[j])
         for name, v in study_outputs(sc, spec, potential, body, inertia[e], qj, Qj, h, pointing).items():
-            res[name][e] = v
+            if name in res:  # only the variables of the outputs asked have a place
+                res[name][e] = v
 
 
 def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):

@@ -15,7 +15,8 @@ import numpy as np
 from ..body import triangle_violation
 from ..errors import InputError
 from ..scenario.paths import leaf_quantity, resolve
-from ..scenario.sweep_schema import INERTIA_PARAMETERS, SweepSpec, definition, in_limits, limits_text
+from ..scenario.sweep_schema import (DEFAULT_LEAVES, INERTIA_PARAMETERS, SweepSpec, definition, in_limits,
+                                     limits_text)
 
 __all__ = ["nominal_values", "nominal_rates", "draw_samples", "MAX_RESAMPLE_ROUNDS", "SAMPLING_VERSION"]
 
@@ -37,12 +38,12 @@ def nominal_values(scenario):
         o = spec.orbit
         out.update(orbit_a=o["a"], orbit_e=o["e"], orbit_i=o["i"], orbit_raan=o["raan"], orbit_argp=o["argp"])
         out[f"orbit_{o['anomaly_kind']}"] = o["anomaly"]
-    if spec.sweep is not None and spec.sweep.paths:  # a path's nominal value: the file's, in the key's unit
-        import tomllib
+    if spec.sweep is not None and spec.sweep.paths:  # a path's nominal value: the file's (else the key's
+        import tomllib                                 # default), in the key's unit
 
         data = tomllib.loads(scenario.text)
         for path in spec.sweep.paths:
-            out[path] = leaf_quantity(resolve(data, path))[0]
+            out[path] = leaf_quantity(resolve(data, path, DEFAULT_LEAVES))[0]
     return out
 
 

@@ -213,7 +213,8 @@ def study_outputs(sc, spec, potential, body, inertia, q, Q, h, pointing):
     dict
         ``detumble_time``, ``settling_time`` (s, NaN if never), ``pointing_error_max``,
         ``pointing_error_rms`` (rad), ``max_wheel_speed`` (n,), ``wheel_saturated`` (n,) (bool),
-        ``max_control_torque`` (internal torque unit), ``max_dipole`` (1e-6 A m^2), those asked.
+        ``max_control_torque`` (internal torque unit), ``max_dipole`` (1e-6 A m^2): exactly the
+        variables of the outputs asked (:data:`STUDY_OUTPUTS`), none that were only computed alongside.
     """
     t = sc.times
     outs = set(spec.outputs)
@@ -252,4 +253,6 @@ def study_outputs(sc, spec, potential, body, inertia, q, Q, h, pointing):
                                                          + tau[:, 2] * tau[:, 2])))
     if "max_dipole" in outs:
         out["max_dipole"] = float(np.max(np.sqrt(m[:, 0] * m[:, 0] + m[:, 1] * m[:, 1] + m[:, 2] * m[:, 2])))
-    return out
+    # outputs computed together (the wheels' speeds and saturation) are returned only if asked
+    asked = {name for o in outs if o in STUDY_OUTPUTS for name in STUDY_OUTPUTS[o]}
+    return {name: v for name, v in out.items() if name in asked}

@@ -110,3 +110,51 @@ def test_a_case_that_makes_the_scenario_invalid_is_named_or_resampled():
                                                                    '"resample"'), "r.toml")), seed=7)
     v = sw.values["body.facets[0].drag_coefficient"]
     assert sw.resampled > 0 and np.all(v >= 0)
+
+
+def test_a_key_that_takes_its_default_varies_about_the_default():
+    """A path naming a key the scenario does not write (issue 34 item 2): its nominal value is
+    the default, and every case is the single run of the scenario that writes it."""
+    base = re.sub(r"^drag_coefficient = .*\n", "", _short("cubesat-3u-disturbances"), flags=re.M)
+    assert "drag_coefficient" not in base
+    sw = _sweep(base, 'samples = 2\n[sweep.parameters]\n"body.facets[0].drag_coefficient" = '
+                      '{ distribution = "normal", std = 0.1 }\n')
+    ds = sw.compute()
+    _each_case_is_its_single_run(sw, ds)
+    c = ds["body_facets_0_drag_coefficient"]
+    assert c.attrs["units"] == "1" and np.all(np.abs(c.values - 2.2) < 1.0)  # the default 2.2 is the mean
+    sw = _sweep(base, '[sweep.parameters]\n"body.facets[0].drag_coefficient" = { values = [2.2, 2.6] }\n')
+    ds = sw.compute()
+    nominal = Scenario(parse(base, "nominal.toml")).run()  # the default written nowhere
+    assert np.array_equal(ds["q_final"].values[0], nominal["q"].values[-1])
+    assert not np.array_equal(ds["q_final"].values[1], nominal["q"].values[-1])
+    # a wheel's speed (default 0) with a unit
+    wheels = _short("lvlh-hold-wheels").replace('speed = "0 rpm"\n', "", 1)
+    sw = _sweep(wheels, '[sweep.parameters]\n"body.wheels[0].speed" = { values = ["0 rpm", "100 rpm"] }\n')
+    ds = sw.compute()
+    _each_case_is_its_single_run(sw, ds)
+    assert sw.nominal["body.wheels[0].speed"] == 0.0
+    np.testing.assert_allclose(ds["body_wheels_0_speed"].values, [0.0, 100 * 2 * np.pi / 60], rtol=1e-12)
+    # a key the table cannot have, or a table the scenario lacks, is still refused
+    for key, match in (('"body.facets[0].nothing"', r"body\.facets\[0\]\.nothing is not in the scenario"),
+                       ('"body.facets[9].drag_coefficient"', r"past its end")):
+        with pytest.raises(ScenarioError, match=match):
+            parse(base + f"\n[sweep]\n[sweep.parameters]\n{key} = {{ values = [1.0] }}\n", "bad.toml")
+    with pytest.raises(ScenarioError, match=r"body\.facets is not in the scenario"):
+        parse(_short("cubesat-bdot-detumble") + '\n[sweep]\n[sweep.parameters]\n"body.facets[0].drag_coefficient" = '
+                                                '{ values = [1.0] }\n', "bad.toml")
+
+
+def test_default_leaves_are_the_documented_defaults():
+    from orbatt.scenario.paths import leaf_quantity
+    from orbatt.scenario.schema import KEY_DOCS
+    from orbatt.scenario.sweep_schema import DEFAULT_LEAVES
+
+    numeric = {}
+    for table, keys in KEY_DOCS.items():
+        for key, (_, default, _) in keys.items():
+            try:
+                numeric[table, key] = float(default)
+            except ValueError:
+                pass
+    assert {k: leaf_quantity(v)[0] for k, v in DEFAULT_LEAVES.items()} == numeric
