@@ -14,8 +14,9 @@ from ..epoch import parse_epoch
 from ..errors import InputError
 from ..units import parse_unit, unit_string
 from . import plots
-from .aem import write_aem
+from .aem import is_orbatt_aem, write_aem
 from .netcdf import write_netcdf
+from .paths import check_output_path
 from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["OrbattAccessor"]
@@ -153,11 +154,18 @@ class OrbattAccessor:
 
     # I/O --------------------------------------------------------------------------------
     def to_netcdf(self, path, **kwargs):
-        """Write to NetCDF (:func:`write_netcdf`; ``append=True`` adds samples)."""
+        """Write to NetCDF (:func:`write_netcdf`; ``append=True`` adds samples). As ``orbatt
+        run -o`` (:func:`orbatt.dataset.check_output_path`): only a new file or an earlier
+        orbatt result is written, never a link, a folder or any other file
+        (:class:`~orbatt.errors.InputError`)."""
+        check_output_path(path, what="to_netcdf")
         write_netcdf(self._ds, path, **kwargs)
 
     def to_aem(self, path, **kwargs):
-        """Write ``q`` as a CCSDS AEM (:func:`orbatt.dataset.aem.write_aem`)."""
+        """Write ``q`` as a CCSDS AEM (:func:`orbatt.dataset.aem.write_aem`); as ``--aem``, only a
+        new file or an earlier orbatt AEM is written (:func:`orbatt.dataset.check_output_path`)."""
+        if path is not None:
+            check_output_path(path, what="to_aem", ours=is_orbatt_aem)
         return write_aem(self._ds, path, **kwargs)
 
     # plots (orbatt.dataset.plots) --------------------------------------------------------

@@ -51,6 +51,7 @@ if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is rea
     import xarray as xr
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
+           "is_orbatt_result", "check_replaceable",
            "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS", "NOMINAL_EPOCH", "NOMINAL_COMMENT",
            "LEGACY_NOMINAL_REFERENCE"]
 
@@ -213,6 +214,79 @@ def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
     return enc
 
 
+def is_orbatt_result(path) -> bool:
+    """True when ``path`` is a file (or Zarr store) orbatt wrote: a NetCDF file, or a Zarr
+    folder, with the global attribute ``orbatt_version``. Reads the header only; a file that
+    cannot be opened as NetCDF is not an orbatt result."""
+    from pathlib import Path
+
+    p = Path(path)
+    if p.is_dir():
+        for meta in (".zattrs", "zarr.json"):
+            try:
+                if '"orbatt_version"' in (p / meta).read_text(errors="replace"):
+                    return True
+            except OSError:
+                continue
+        return False
+    if not p.is_file():
+        return False
+    try:
+        with open(p, "rb") as f:
+            if f.read(8) != b"\x89HDF\r\n\x1a\n":  # netCDF-4 is HDF5; orbatt writes nothing else
+                return False
+        engine = check_engine(None)
+        if engine == "netcdf4":
+            import netCDF4
+
+            with netCDF4.Dataset(os.fspath(p), "r") as f:
+                return "orbatt_version" in f.ncattrs()
+        import h5netcdf
+
+        with h5netcdf.File(os.fspath(p), "r") as f:
+            return "orbatt_version" in f.attrs
+    except Exception:  # noqa: BLE001 - any failure to read it: not a result
+        return False
+
+
+def check_replaceable(path, *, what="path", zarr=False, ours=None):
+    """Refuse to write over what is at ``path`` unless it is an earlier orbatt result: the check
+    of the CLI's ``-o`` (:func:`orbatt.dataset.check_output_path`), of :func:`write_netcdf` and
+    of ``ds.orbatt.to_netcdf``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str
+        The option, function or field named in the message (``"-o"``, ``"write_netcdf"``).
+    zarr : bool
+        Accept an existing Zarr store (a folder named ``*.zarr``) that orbatt wrote.
+    ours : callable, optional
+        ``ours(path) -> bool``: whether an existing file may be replaced (default
+        :func:`is_orbatt_result`).
+
+    Raises
+    ------
+    InputError
+        ``path`` is a symbolic link (orbatt never writes through a link nor replaces one: the
+        atomic rename would put a file where the link was), a folder (other than an orbatt
+        Zarr store with ``zarr``), or anything else that exists and is not ``ours``: a
+        user's file, a FIFO, another program's NetCDF file.
+    """
+    from pathlib import Path
+
+    s = os.fspath(path)
+    p = Path(s)
+    if p.is_symlink():
+        raise InputError(f"{what}: {s!r} is a symbolic link; orbatt never writes through or replaces a link: "
+                         "give the path of the file it points to, or another path")
+    if p.is_dir() and not (zarr and p.suffix == ".zarr"):
+        raise InputError(f"{what}: {s!r} is a folder; give a file in it such as '{p / 'result.nc'}'")
+    if p.exists() and not (ours or is_orbatt_result)(p):
+        raise InputError(f"{what}: {s!r} exists and is not an orbatt result; orbatt overwrites only its own "
+                         "results: give another path or remove that file")
+
+
 def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1,
                  chunk_time=DEFAULT_CHUNK_TIME):
     """Write an orbatt Dataset to a netCDF-4 file, or append its samples to one.
@@ -256,8 +330,12 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
     there (so it costs a copy of the file), then it is flushed to disk and renamed over
     ``path``. A kill during the write leaves the earlier file, never a partial one under
     ``path``; the temporary file it leaves is removed by the next write of ``path``. Use
-    :func:`orbatt.dataset.paths.check_output_path` first to refuse paths that are not orbatt
-    results.
+    :func:`orbatt.dataset.paths.check_output_path` first to refuse, before a long computation,
+    paths that cannot be written.
+
+    Only an earlier orbatt result is replaced or appended to (:func:`check_replaceable`): an
+    :class:`~orbatt.errors.InputError` refuses a symbolic link, a folder and any other file
+    at ``path`` before anything is written.
 
     With the netCDF4 engine, a new file of plain numpy variables is written by
     :mod:`orbatt.dataset.netcdf_direct` (the file xarray writes, without importing dask);
@@ -265,6 +343,7 @@ def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1
     """
     engine = check_engine(engine)
     path = os.fspath(path)
+    check_replaceable(path, what="write_netcdf")
     with _interrupts_deferred(path) as interrupted:
         if append and os.path.exists(path):
             with replacing(path) as tmp:  # append to a copy, renamed over path
@@ -414,6 +493,7 @@ def _append(ds: xr.Dataset, path, engine, name=None):
             if t_new.size > start and t_new[start] <= last:
                 raise InputError(f"append: new samples start at time {float(t_new[start])!r}, not after the "
                                  f"last time {last!r} of {name}; append only later samples")
+        _check_same_run(f, piece, ds.attrs, engine, name)
         n = t_new.size - start
         if n <= 0:
             return
@@ -451,6 +531,61 @@ def _append(ds: xr.Dataset, path, engine, name=None):
         put("history", f"{hist}\n{now} orbatt {orbatt_version()}: appended {n} samples".lstrip("\n"))
     finally:
         f.close()
+
+
+#: global attributes that say which run a file holds: samples appended must have the same
+#: (where both the file and the new samples have one)
+SAME_RUN_ATTRS = ("scenario", "potential", "orbit", "unit_system")
+#: dimensions along which appended samples add entries (their variables are not compared)
+_GROWING = ("time", "eclipse")
+
+
+def _shown(values, n=6):
+    flat = np.asarray(values).ravel()
+    text = np.array2string(flat[:n], precision=17, separator=", ")
+    return text[:-1] + ", ...]" if flat.size > n else text
+
+
+def _check_same_run(f, piece, attrs, engine, name):
+    """Refuse samples ``piece`` (file form) of another run than the open file ``f`` holds,
+    naming what differs: a variable's dimensions, shape or ``units``, the values of a variable
+    that does not grow with the samples (``inertia``, the wheels' axes ...), or one of
+    :data:`SAME_RUN_ATTRS` (the scenario text, the potential, the orbit)."""
+    def var_attrs(v):
+        return dict(v.attrs) if engine == "h5netcdf" else {k: v.getncattr(k) for k in v.ncattrs()}
+
+    for vname, var in piece.variables.items():
+        fv = f.variables[vname]
+        kind = np.dtype(var.dtype).kind
+        if kind not in "fiubM":  # labels (text: a character dimension in the file)
+            continue
+        if tuple(fv.dimensions) != tuple(var.dims):
+            raise InputError(f"append: {vname} has dimensions {tuple(fv.dimensions)} in {name} and {tuple(var.dims)} "
+                             "in the new samples; append only samples of the same run")
+        shape_f = tuple(n for d, n in zip(fv.dimensions, fv.shape) if d not in _GROWING)
+        shape_p = tuple(n for d, n in zip(var.dims, var.shape) if d not in _GROWING)
+        if shape_f != shape_p:
+            raise InputError(f"append: {vname} has shape {shape_f} in {name} and {shape_p} in the new samples "
+                             "(other than along time); append only samples of the same run")
+        u_file, u_new = var_attrs(fv).get("units"), var.attrs.get("units")
+        if u_file is not None and u_new is not None and str(u_file) != str(u_new):
+            raise InputError(f"append: {vname} is in {str(u_file)!r} in {name} and in {str(u_new)!r} in the new "
+                             "samples; convert them to the file's units, or write a new file")
+        if any(d in _GROWING for d in var.dims) or kind not in "fiub":
+            continue
+        values = np.asarray(var.values)
+        old = np.asarray(fv[...])
+        if old.shape != values.shape or not np.array_equal(old, values, equal_nan=kind == "f"):
+            unit = "" if u_new is None or str(u_new) == "1" else f" {u_new}"
+            raise InputError(f"append: the new samples are of another run: {vname} is {_shown(old)}{unit} in {name} "
+                             f"and {_shown(values)}{unit} in the new samples; append only samples of the same run")
+    get = (lambda k: f.attrs.get(k)) if engine == "h5netcdf" else (
+        lambda k: f.getncattr(k) if k in f.ncattrs() else None)
+    for key in SAME_RUN_ATTRS:
+        a, b = get(key), attrs.get(key)
+        if a is not None and b is not None and str(a) != str(b):
+            raise InputError(f"append: the new samples are of another run: their global attribute {key!r} differs "
+                             f"from that of {name}; append only samples of the same run")
 
 
 def _sum_stats(a, b):

@@ -1,6 +1,7 @@
 """Output paths of results, checked before a run computes anything: file names derived from a
 scenario's ``name`` (:func:`file_name`), and the output file itself (:func:`check_output_path`:
-a writable folder, and no file there but an earlier orbatt result, :func:`is_orbatt_result`).
+a writable folder, and no file there but an earlier orbatt result, :func:`is_orbatt_result`;
+never a symbolic link: :func:`check_replaceable`, shared with :func:`write_netcdf`).
 """
 from __future__ import annotations
 
@@ -10,9 +11,9 @@ from pathlib import Path
 
 from ..errors import InputError
 from .atomic import TEMP_PREFIX
-from .netcdf import check_engine
+from .netcdf import check_replaceable, is_orbatt_result
 
-__all__ = ["file_name", "is_orbatt_result", "check_output_path"]
+__all__ = ["file_name", "is_orbatt_result", "check_output_path", "check_replaceable"]
 
 _NAME_MAX = 255  # bytes in one file name (Linux, macOS, Windows)
 
@@ -59,39 +60,6 @@ def file_name(name, suffix="", *, what="name"):
     return out
 
 
-def is_orbatt_result(path) -> bool:
-    """True when ``path`` is a file (or Zarr store) orbatt wrote: a NetCDF file, or a Zarr
-    folder, with the global attribute ``orbatt_version``. Reads the header only; a file that
-    cannot be opened as NetCDF is not an orbatt result."""
-    p = Path(path)
-    if p.is_dir():
-        for meta in (".zattrs", "zarr.json"):
-            try:
-                if '"orbatt_version"' in (p / meta).read_text(errors="replace"):
-                    return True
-            except OSError:
-                continue
-        return False
-    if not p.is_file():
-        return False
-    try:
-        with open(p, "rb") as f:
-            if f.read(8) != b"\x89HDF\r\n\x1a\n":  # netCDF-4 is HDF5; orbatt writes nothing else
-                return False
-        engine = check_engine(None)
-        if engine == "netcdf4":
-            import netCDF4
-
-            with netCDF4.Dataset(os.fspath(p), "r") as f:
-                return "orbatt_version" in f.ncattrs()
-        import h5netcdf
-
-        with h5netcdf.File(os.fspath(p), "r") as f:
-            return "orbatt_version" in f.attrs
-    except Exception:  # noqa: BLE001 - any failure to read it: not a result
-        return False
-
-
 def check_output_path(path, *, what="-o", zarr=False, ours=None):
     """Refuse an output path that cannot or must not be written, before any computation.
 
@@ -115,9 +83,11 @@ def check_output_path(path, *, what="-o", zarr=False, ours=None):
     Raises
     ------
     InputError
-        ``path`` is a folder; its folder is missing, not a folder, or not writable (tested by
-        creating and removing a ``.tmp-`` file there); or ``path`` exists and is not an orbatt
-        result (``ours``): only earlier orbatt results are overwritten.
+        ``path`` is a folder or a symbolic link; its folder is missing, not a folder, or not
+        writable (tested by creating and removing a ``.tmp-`` file there); or ``path`` exists
+        and is not an orbatt result (``ours``): only earlier orbatt results are overwritten
+        (:func:`check_replaceable`, which :func:`write_netcdf` and ``ds.orbatt.to_netcdf`` apply
+        too).
     """
     s = os.fspath(path)
     bad = [c for c in s if ord(c) < 32 or ord(c) == 127]
@@ -126,6 +96,8 @@ def check_output_path(path, *, what="-o", zarr=False, ours=None):
     p = Path(s)
     if not s or s.endswith(("/", os.sep)):
         raise InputError(f"{what}: {s!r} is not a file name; give a file such as 'result.nc'")
+    if p.is_symlink():
+        check_replaceable(p, what=what, zarr=zarr, ours=ours)
     if p.is_dir() and not (zarr and p.suffix == ".zarr"):
         raise InputError(f"{what}: {s!r} is a folder; give a file in it such as '{p / 'result.nc'}'")
     folder = p.parent
@@ -139,7 +111,5 @@ def check_output_path(path, *, what="-o", zarr=False, ours=None):
     except OSError as exc:
         raise InputError(f"{what}: cannot write in the folder {str(folder)!r} of {s!r} "
                          f"({exc.strerror or exc}); give a writable folder") from None
-    if (p.exists() or p.is_symlink()) and not (ours or is_orbatt_result)(p):
-        raise InputError(f"{what}: {s!r} exists and is not an orbatt result; orbatt overwrites only its own "
-                         "results: give another path or remove that file")
+    check_replaceable(p, what=what, zarr=zarr, ours=ours)
     return p

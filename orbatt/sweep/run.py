@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dataset import global_attrs, open_dataset
+from ..dataset import check_output_path, global_attrs, open_dataset
 from ..dataset.atomic import replacing
 from ..errors import InputError, SweepError
 from .cases import Sweep, load_sweep
@@ -176,6 +176,7 @@ def _output(output, resume):
                              "or give a .nc file") from None
     if not out_path.parent.is_dir():
         raise InputError(f"output: the folder {str(out_path.parent)!r} does not exist")
+    check_output_path(out_path, what="output", zarr=True)  # as -o: no link, only an earlier orbatt result
     return out_path, parts_dir(out_path), zarr_out
 
 
