@@ -223,7 +223,11 @@ def _aem_path(args, sc, out):
 
     if not args.aem.strip():
         raise InputError(f"--aem: {args.aem!r} is an empty path; give a file such as --aem attitude.aem")
-    if sc.spec.dimensionless or sc.orbit is None or getattr(sc.orbit, "epoch", None) is None:
+    if getattr(sc, "system", None) is not None:  # a binary asteroid (BinaryScenario): no orbit provider
+        raise InputError("--aem: an AEM needs absolute times and a binary asteroid scenario ([orbit] provider = "
+                         "\"coupled\") has no epoch; leave --aem out")
+    orbit = getattr(sc, "orbit", None)
+    if sc.spec.dimensionless or orbit is None or getattr(orbit, "epoch", None) is None:
         raise InputError("--aem: an AEM needs absolute times and this scenario has no epoch (no [orbit] with "
                          "epoch); add one or leave --aem out")
     if os.path.abspath(args.aem) == os.path.abspath(out):
@@ -411,11 +415,12 @@ def _cmd_scenarios(args):
 
 
 def _existing(path):
-    from .errors import InputError
+    from .errors import InputError, not_a_file
 
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"file: {path!r} does not exist; give the path of a NetCDF file written by 'orbatt run'")
+    why = not_a_file(p)
+    if why is not None:
+        raise InputError(f"file: {path!r} {why}; give the path of a NetCDF file written by 'orbatt run'")
     return p
 
 

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, not_a_file
 from ..units import LEGACY_OUTPUT
 from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, UNIT_SYSTEM, orbatt_version, utc_now
@@ -51,7 +51,7 @@ if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is rea
     import xarray as xr
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
-           "is_orbatt_result", "check_replaceable",
+           "is_orbatt_result", "check_replaceable", "check_global_attributes", "JSON_ATTRS", "INTEGER_ATTRS",
            "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS", "NOMINAL_EPOCH", "NOMINAL_COMMENT",
            "LEGACY_NOMINAL_REFERENCE"]
 
@@ -178,7 +178,11 @@ def _decode_time_axis(ds, xr, decode_time):
         if not legacy or real:
             attrs.update(units=units)  # the file's own reference, as xarray reads it
         elapsed = (values, elapsed_attrs(epoch, False))
-        time = decode_time(xr.Variable(("time",), values.astype(np.float64), attrs))
+        try:
+            time = decode_time(xr.Variable(("time",), values.astype(np.float64), attrs))
+        except (ValueError, TypeError, OverflowError, ArithmeticError) as exc:  # pandas/cftime on a bad date
+            raise InputError(f"time: units {units!r}: {ref!r} is not a date orbatt can read ({type(exc).__name__}); "
+                             "orbatt files use 'seconds since <ISO 8601 UTC epoch>'") from None
     elif units == "1":
         if not legacy:
             return ds
@@ -691,6 +695,9 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     kwargs.setdefault("decode_times", False)
     kwargs.setdefault("decode_timedelta", False)
     name = os.fspath(path)
+    why = not_a_file(name)  # before opening: a FIFO would block
+    if why is not None:
+        raise InputError(f"{name}: {why}; give a result of 'orbatt run' or 'orbatt sweep'")
     try:
         with open(name, "rb") as f:
             head = f.read(8)
@@ -708,7 +715,16 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
         ds.close()
         raise InputError(f"{name}: a NetCDF file not written by orbatt (no orbatt_version attribute); give a "
                          "result of 'orbatt run' or 'orbatt sweep'")
-    ds = decode(ds)
+    try:
+        check_global_attributes(ds.attrs)
+        ds = decode(ds)
+    except InputError as exc:
+        ds.close()
+        raise InputError(f"{name}: {exc}") from None
+    except (ValueError, TypeError, KeyError, OverflowError, ArithmeticError) as exc:
+        ds.close()
+        raise InputError(f"{name}: damaged: its variables cannot be decoded ({type(exc).__name__}: "
+                         f"{_short(exc)})") from None
     if load:
         try:
             ds = ds.load()
@@ -717,6 +733,58 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
             raise InputError(f"{name}: damaged: reading its values failed ({type(exc).__name__}: "
                              f"{_short(exc)})") from None
     return ds
+
+
+#: global attributes written as JSON text: ``{name: type of the value}`` (:func:`check_global_attributes`)
+JSON_ATTRS = {"method_settings": dict, "integration_stats": dict, "potential": dict, "orbit": dict, "wheels": list,
+              "sweep_parameters": dict, "sweep_outputs": list, "sweep_run": dict}
+#: global attributes that are whole numbers: ``{name: (low, high)}`` (None: unbounded)
+INTEGER_ATTRS = {"integration_complete": (0, 1), "sweep_cases": (0, None), "sweep_samples": (0, None),
+                 "sweep_grid_points": (0, None), "sweep_resampled_cases": (0, None), "sweep_seed": (0, None),
+                 "sweep_output_times": (0, None)}
+
+
+def _integer(value):
+    """The whole number ``value`` holds (an integer, a one-element integer array, or a float
+    with an integer value), else None."""
+    v = np.asarray(value)
+    if v.size != 1 or v.dtype.kind not in "iuf":
+        return None
+    x = v.reshape(()).item()
+    if isinstance(x, float) and not (np.isfinite(x) and x == int(x)):
+        return None
+    return int(x)
+
+
+def check_global_attributes(attrs):
+    """Refuse an orbatt file whose global attributes orbatt reads are damaged (a truncated or
+    edited file): the JSON ones (:data:`JSON_ATTRS`) must hold JSON of their type, the whole
+    numbers (:data:`INTEGER_ATTRS`) whole numbers in their range. Raises
+    :class:`~orbatt.errors.InputError` naming the attribute."""
+    for key, kind in JSON_ATTRS.items():
+        if key not in attrs:
+            continue
+        text = attrs[key]
+        if isinstance(text, bytes):
+            text = text.decode("utf-8", "replace")
+        if not isinstance(text, str):
+            raise InputError(f"global attribute {key!r} is damaged: {_short(repr(text), 60)} is not JSON text")
+        try:
+            value = json.loads(text)
+        except ValueError as exc:
+            raise InputError(f"global attribute {key!r} is damaged: not JSON ({_short(exc, 80)}); the file was "
+                             "truncated or edited: write it again with orbatt") from None
+        if not isinstance(value, kind):
+            raise InputError(f"global attribute {key!r} is damaged: JSON {type(value).__name__}, not a "
+                             f"{'JSON object' if kind is dict else 'JSON list'}")
+    for key, (low, high) in INTEGER_ATTRS.items():
+        if key not in attrs:
+            continue
+        x = _integer(attrs[key])
+        if x is None or x < low or (high is not None and x > high):
+            want = f"{low} or {high}" if high == low + 1 else f"a whole number >= {low}"
+            raise InputError(f"global attribute {key!r} is damaged: {_short(repr(attrs[key]), 60)}, not {want}; the "
+                             "file was truncated or edited: write it again with orbatt")
 
 
 def _short(exc, n=120):

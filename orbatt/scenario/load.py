@@ -16,7 +16,7 @@ from .. import units as U
 from ..body import RigidBody
 from ..control import reaction_wheel
 from ..environment.frames import one_dates_warning
-from ..errors import ScenarioError
+from ..errors import ScenarioError, not_a_file
 from .build import (build_initial_state, build_kepler_orbit, build_output_times, build_potential,
                     build_rebound_orbit, build_tle_orbit, check_field_span, check_work, environment_margin,
                     estimate_steps, run_to_content, tle_period)
@@ -184,6 +184,9 @@ def load_scenario(path) -> Scenario:
         if f is not None:
             key = f.name[:-5]
             return Scenario(parse_scenario_text(read_scenario_text(f), key), path=key)
+        why = not_a_file(p)
+        if why != "does not exist":  # a folder, a FIFO ...: say what it is
+            raise ScenarioError(f"{path}: {why}; give a path to a TOML scenario file")
         raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
                             f"{', '.join(sorted(name for name, _, _ in shipped_scenarios()))}")
     return Scenario(parse_scenario_text(read_scenario_text(p), str(p)), path=p)
