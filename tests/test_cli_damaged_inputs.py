@@ -117,3 +117,33 @@ def test_a_fifo_never_blocks_open_dataset(tmp_path):
     t.start()
     t.join(30)
     assert done and "FIFO" in done[0]
+
+
+def test_a_small_file_declaring_1e8_samples_is_refused_without_reading_them(good, tmp_path, cli):
+    import time
+
+    netCDF4 = pytest.importorskip("netCDF4")
+    path = tmp_path / "sparse.nc"
+    shutil.copyfile(good, path)
+    with netCDF4.Dataset(path, "a") as f:  # one value at sample 1e8: the chunks between are never written
+        f.set_auto_maskandscale(False)
+        f.variables["time"][10**8 - 1] = 1e9
+    assert path.stat().st_size < 2**20
+    t0 = time.monotonic()
+    for args in (("info", path), ("plot", path, "-o", tmp_path / "figs"), ("export", path, "--aem", "x.aem")):
+        rc, err = cli(*args, cwd=tmp_path)
+        _refused(rc, err, "sparse.nc", "declares 100000000 samples")
+    with pytest.raises(InputError, match="data are missing"):
+        orbatt.open_dataset(path)
+    assert time.monotonic() - t0 < 30
+
+
+def test_values_the_machine_cannot_hold_are_refused_before_loading(good, tmp_path, cli, monkeypatch):
+    from orbatt.dataset import netcdf
+
+    monkeypatch.setattr(netcdf, "available_memory", lambda: 10_000)  # a 10 kB machine
+    with pytest.raises(InputError, match=r"more than this machine can hold \(1e-05 GB available\)"):
+        orbatt.open_dataset(good, load=True)
+    assert orbatt.open_dataset(good)["q"].shape[0] == 101  # lazily: opened
+    rc, err = cli("info", good, cwd=tmp_path)
+    _refused(rc, err, "good.nc", "samples", "more than this machine can hold")

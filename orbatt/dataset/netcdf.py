@@ -52,6 +52,7 @@ if TYPE_CHECKING:  # annotations only: xarray is imported where a Dataset is rea
 
 __all__ = ["write_netcdf", "open_dataset", "NetCDFWriter", "check_engine", "encode", "decode", "encoding",
            "is_orbatt_result", "check_replaceable", "check_global_attributes", "JSON_ATTRS", "INTEGER_ATTRS",
+           "check_declared_size", "available_memory",
            "TEMP_PREFIX", "DEFAULT_CHUNK_TIME", "LEAP_SECONDS", "NOMINAL_EPOCH", "NOMINAL_COMMENT",
            "LEGACY_NOMINAL_REFERENCE"]
 
@@ -706,6 +707,7 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     if head != b"\x89HDF\r\n\x1a\n":  # orbatt writes netCDF-4 (HDF5) only
         what = "a netCDF-3 file" if head.startswith(b"CDF") else "not a NetCDF file"
         raise InputError(f"{name}: {what}, not written by orbatt; give a result of 'orbatt run' or 'orbatt sweep'")
+    check_declared_size(name, engine, load=load)  # before xarray reads the time index
     try:
         ds = xr.open_dataset(name, engine=engine, **kwargs)
     except Exception as exc:  # noqa: BLE001 - the libraries raise OSError, ValueError, KeyError, ...
@@ -733,6 +735,75 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
             raise InputError(f"{name}: damaged: reading its values failed ({type(exc).__name__}: "
                              f"{_short(exc)})") from None
     return ds
+
+
+#: zlib (deflate) stores at most ~1032 bytes of values in one byte: a file declaring more than this
+#: many bytes of values per byte of file lacks its data (unwritten chunks: a damaged file)
+MAX_COMPRESSION = 2000
+#: declared sizes below this are not compared with the file's size
+_PLAUSIBLE_BELOW = 256 * 2**20
+#: ``open_dataset(load=True)`` refuses a file whose values need more than this share of the
+#: memory available (:func:`available_memory`)
+MEMORY_SHARE = 0.5
+
+
+def available_memory():
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; else the free
+    physical pages), or None where it cannot be found."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def _declared(name, engine):
+    """``(bytes of every variable's values as declared, samples along time)`` read from the
+    header of ``name`` alone, or None where the header cannot be read (xarray then says why)."""
+    try:
+        if engine == "netcdf4":
+            import netCDF4
+
+            with netCDF4.Dataset(name, "r") as f:
+                items = [(v.shape, getattr(v.dtype, "itemsize", 8)) for v in f.variables.values()]
+                n = len(f.dimensions["time"]) if "time" in f.dimensions else 0
+        else:
+            import h5netcdf
+
+            with h5netcdf.File(name, "r") as f:
+                items = [(v.shape, getattr(v.dtype, "itemsize", 8)) for v in f.variables.values()]
+                n = f.dimensions["time"].size if "time" in f.dimensions else 0
+    except Exception:  # noqa: BLE001 - the reader below names the problem
+        return None
+    total = sum(float(np.prod(shape, dtype=np.float64)) * max(int(size), 1) for shape, size in items)
+    return total, int(n)
+
+
+def check_declared_size(name, engine, *, load=False):
+    """Refuse, before reading any value, a file whose header declares far more values than it
+    can hold (:data:`MAX_COMPRESSION`: its data are missing) and, with ``load``, one whose
+    values need more than :data:`MEMORY_SHARE` of the available memory; the message names the
+    samples and the sizes."""
+    found = _declared(name, engine)
+    if found is None:
+        return
+    total, n = found
+    size = os.path.getsize(name)
+    if total > _PLAUSIBLE_BELOW and total > MAX_COMPRESSION * size:
+        raise InputError(f"{name}: damaged: it declares {n} samples ({total / 1e9:.3g} GB of values) in "
+                         f"{size / 1e6:.3g} MB, more than compression can hold: its data are missing (a truncated or "
+                         "edited file)")
+    avail = available_memory() if load else None
+    if avail is not None and total > MEMORY_SHARE * avail:
+        raise InputError(f"{name}: {n} samples ({total / 1e9:.3g} GB of values) are more than this machine can "
+                         f"hold ({avail / 1e9:.3g} GB available); open it lazily (orbatt.open_dataset(path, "
+                         "chunks={}) with dask) or select times with xarray")
 
 
 #: global attributes written as JSON text: ``{name: type of the value}`` (:func:`check_global_attributes`)
