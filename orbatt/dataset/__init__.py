@@ -51,7 +51,9 @@ Global attributes: ``Conventions = "CF-1.11"``, ``title``, ``source``, ``referen
 ``orbatt_version``, ``method``, ``method_settings`` and ``integration_stats`` (JSON text),
 ``integration_complete`` (1 or 0), ``potential`` and ``orbit`` (JSON text of their
 ``describe()``), ``unit_system``, ``epoch`` (ISO 8601 UTC, only when the problem has one),
-``scenario`` (the scenario's TOML text, when given), ``date_created``, ``history``.
+``scenario`` (the scenario's TOML text, when given), ``wheels`` (with reaction wheels: JSON
+text of each wheel's ``describe()``, its limits ``max_speed_rad_s`` and ``max_torque_N_m``
+included, null for none), ``date_created``, ``history``.
 
 NetCDF (:func:`write_netcdf`, :func:`open_dataset`): float64 stored losslessly (zlib + shuffle),
 chunked along an unlimited ``time`` dimension, so that :class:`NetCDFWriter` (or

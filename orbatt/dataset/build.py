@@ -489,9 +489,11 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     pot_desc = _describe(tr.potential)
     if tr.control is not None and "control" not in pot_desc:  # a law given beside the potential
         pot_desc = {**pot_desc, "control": tr.control.describe()}
+    # the wheels' settings and limits (what the wheels figure draws: figure_data.wheel_limits)
+    wheels = {"wheels": to_json([w.describe() for w in body.wheels])} if body.wheels else {}
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=pot_desc,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
-                         scenario_text=scenario_text, title=title)
+                         scenario_text=scenario_text, title=title, **wheels)
     if not dimless:  # the Dataset boundary: the attitude family from kernel units to SI
         data, coords = si_form(data), si_form(coords)
     return Content(data, coords, attrs)

@@ -9,28 +9,11 @@ needs it: ``content["q"].values``, ``content["q"].attrs``, ``content.attrs``, ``
 """
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 
+from .variable import Var
+
 __all__ = ["Var", "Content"]
-
-
-class Var(NamedTuple):
-    """One variable: dimension names, values (a numpy array of that many dimensions) and
-    attributes (CF ``units``, ``long_name`` ...)."""
-
-    dims: tuple
-    values: np.ndarray
-    attrs: dict
-
-    @property
-    def dtype(self):
-        return self.values.dtype
-
-    @property
-    def shape(self):
-        return self.values.shape
 
 
 class Content:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.switches import eclipse_times
-from .content import Var
+from .variable import Var
 from .timeaxis import LEAP_SECONDS, NOMINAL_EPOCH
 
 __all__ = ["TIME_VARIABLES", "ECLIPSE_SAMPLING_S", "eclipse_variables", "decode_variables", "file_variables"]

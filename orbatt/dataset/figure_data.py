@@ -140,37 +140,63 @@ def eclipse_intervals(ds, x):
     return out
 
 
-def _scenario_spec(ds):
+def _stored_scenario(ds):
+    """The stored scenario's TOML tables (``scenario`` attribute), read as plain TOML: the run
+    validated them; ``{}`` without one or where it does not read."""
     text = ds.attrs.get("scenario")
     if not text:
+        return {}
+    try:
+        import tomllib
+
+        return tomllib.loads(str(text))
+    except (ImportError, ValueError):
+        return {}
+
+
+def _value_in(value, unit):
+    """A scenario value (``"6000 rpm"``, or a plain number: already in ``unit``, the
+    normalized scenarios' form) in ``unit``, or None where it is not one."""
+    if isinstance(value, bool) or value is None:
         return None
     try:
-        from ..scenario.schema import parse
-
-        return parse(text, ds.attrs.get("title", "result"))
-    except Exception:  # noqa: BLE001 - a file of another version: no limits to draw
+        if isinstance(value, (int, float)):
+            return float(value)
+        return float(u.Quantity(str(value)).to_value(unit))
+    except (TypeError, ValueError, u.UnitsError):
         return None
 
 
 def wheel_limits(ds):
     """``(max_speed, max_torque)``: each wheel's limits (rad/s, N m; NaN for none), from the
-    stored scenario (``scenario`` attribute), or None without one."""
-    spec = _scenario_spec(ds)
-    wheels = (spec.control or {}).get("wheels") if spec is not None else None
-    if not wheels or "wheel" not in ds.sizes or len(wheels) != ds.sizes["wheel"]:
+    ``wheels`` attribute (JSON, :func:`orbatt.dataset.build.dataset_content` writes it), else
+    (files of orbatt before it) the stored scenario's ``[[body.wheels]]``; None without either,
+    or where their count is not the ``wheel`` dimension's."""
+    if "wheel" not in ds.sizes:
         return None
-    speed = [np.nan if w["max_speed"] is None else w["max_speed"] for w in wheels]
-    torque = [np.nan if w.get("max_torque") is None else w["max_torque"] for w in wheels]
-    return np.asarray(speed, dtype=np.float64), np.asarray(torque, dtype=np.float64)
+    try:
+        wheels = json.loads(ds.attrs["wheels"])
+        speed = [_value_in(w.get("max_speed_rad_s"), u.rad / u.s) for w in wheels]
+        torque = [_value_in(w.get("max_torque_N_m"), u.N * u.m) for w in wheels]
+    except (KeyError, TypeError, ValueError, AttributeError):
+        wheels = (_stored_scenario(ds).get("body") or {}).get("wheels")
+        if not isinstance(wheels, list) or not all(isinstance(w, dict) for w in wheels):
+            return None
+        speed = [_value_in(w.get("max_speed"), u.rad / u.s) for w in wheels]
+        torque = [_value_in(w.get("max_torque"), u.N * u.m) for w in wheels]
+    if not wheels or len(wheels) != ds.sizes["wheel"]:
+        return None
+    return (np.array([np.nan if v is None else v for v in speed], dtype=np.float64),
+            np.array([np.nan if v is None else v for v in torque], dtype=np.float64))
 
 
 def thresholds(ds):
     """The study thresholds of the stored scenario's ``[sweep]`` table: ``{"detumble_rate":
     rad/s (plain in normalized units) or None, "settling_angle": rad or None}``."""
-    spec = _scenario_spec(ds)
-    sweep = getattr(spec, "sweep", None) if spec is not None else None
-    return {"detumble_rate": getattr(sweep, "detumble_rate", None),
-            "settling_angle": getattr(sweep, "settling_angle", None)}
+    sweep = _stored_scenario(ds).get("sweep")
+    sweep = sweep if isinstance(sweep, dict) else {}
+    return {"detumble_rate": _value_in(sweep.get("detumble_rate"), u.rad / u.s),
+            "settling_angle": _value_in(sweep.get("settling_angle"), u.rad)}
 
 
 def reference_rates(ds):

@@ -127,7 +127,7 @@ import os  # noqa: E402
 
 from orbatt.cli import main  # noqa: E402
 from orbatt.dataset import figures as F  # noqa: E402
-from orbatt.dataset.figure_data import choose_figures, pointing_error  # noqa: E402
+from orbatt.dataset.figure_data import choose_figures, pointing_error, wheel_limits  # noqa: E402
 from orbatt.dataset.figure_files import check_figure_folder, is_orbatt_figure, write_figures  # noqa: E402
 from orbatt.errors import InputError, OrbattError  # noqa: E402
 
@@ -167,9 +167,20 @@ def ensemble():  # three members of the gravity-gradient LEO satellite, a quarte
     return D.to_dataset(tr, scenario_text=sc.spec.text)
 
 
-def _close(fig):
-    plt.close(fig)
-    return True
+RATES = ["magnitude of the body rate", "body components"]
+
+
+def _shows(fig, suptitle, titles, lines):
+    """The figure is titled ``suptitle``, has one panel per entry of ``titles`` (each titled
+    so) with ``lines[k]`` lines, and a time axis label under the last panel; then it is closed."""
+    try:
+        assert fig.get_suptitle() == suptitle
+        assert [ax.get_title() for ax in fig.axes] == titles
+        assert [len(ax.get_lines()) for ax in fig.axes] == lines
+        assert all(ax.get_ylabel() for ax in fig.axes)
+        assert "time" in fig.axes[-1].get_xlabel() or "UTC" in fig.axes[-1].get_xlabel()
+    finally:
+        plt.close(fig)
 
 
 def test_figures_chosen_from_the_content(free, circular, eccentric, wheels, bdot, disturbed, ensemble):
@@ -195,13 +206,14 @@ def test_pointing_is_the_error_to_the_target_on_a_log_axis(wheels, eccentric):
     np.testing.assert_allclose(top.get_lines()[0].get_ydata(), np.degrees(angle))
     assert [line.get_label() for line in bottom.get_lines()] == ["roll", "pitch", "yaw"]
     assert bottom.get_ylabel() == "error angle [deg]" and fig.axes[-1].get_xlabel() == "time [orbits]"
-    assert _close(fig)
+    _shows(fig, "lvlh-hold-wheels: pointing",
+           ["attitude error to the orbital frame target (PD)", "3-2-1 error angles (roll, pitch, yaw)"], [1, 3])
     # the rate relative to the orbital frame falls as the PD law catches the frame (0.6 -> 0.002 deg/s)
     fig = F.plot_rates(wheels)
     mag, rel = fig.axes[0].get_lines()
     assert rel.get_label() == "|omega| relative to the orbital frame"
     assert rel.get_ydata()[-1] < 0.01 < 0.05 < mag.get_ydata()[-1]  # |omega| -> the orbital rate, 0.063 deg/s
-    assert _close(fig)
+    _shows(fig, "lvlh-hold-wheels: rates", RATES, [2, 3])
     assert "relative to the orbital frame (no control)" in pointing_error(eccentric)[1]
 
 
@@ -216,15 +228,16 @@ def test_rates_in_deg_per_s_with_bdot_steady_state(bdot, free):
     labels = [r.get_label() for r in refs]
     assert labels[0] == "detumble threshold = 0.5 deg/s" and labels[1].startswith("2 n: B-dot's steady state")
     assert len(comps.get_lines()) == 3
-    assert _close(fig)
+    _shows(fig, "cubesat-bdot-detumble: rates", RATES, [3, 3])  # |omega|, the threshold, 2 n
     # a scenario with a detumble threshold of its own ([sweep] detumble_rate): drawn without asking
     mc = _run("cubesat-detumble-montecarlo", '"120 s"')
     fig = F.plot_rates(mc)
     assert fig.axes[0].get_lines()[1].get_label() == "detumble threshold ([sweep] detumble_rate) = 0.5 deg/s"
-    assert _close(fig)
+    _shows(fig, "cubesat-detumble-montecarlo: rates", RATES, [3, 3])
     fig = F.plot_rates(free)  # a dimensionless problem keeps its units
     assert fig.axes[0].get_ylabel() == "|omega| [dimensionless]"
-    assert _close(fig)
+    assert fig.axes[1].get_xlabel() == "time (dimensionless)"
+    _shows(fig, "paper-torque-free: rates", RATES, [1, 3])  # no reference rate without an orbit
 
 
 def test_wheels_speeds_momentum_torque_and_limits(wheels):
@@ -237,7 +250,40 @@ def test_wheels_speeds_momentum_torque_and_limits(wheels):
     assert "max_speed = +-6000 rpm" in labels
     np.testing.assert_allclose(speed.get_lines()[2].get_ydata()[0], 2000.0, rtol=1e-9)  # the momentum bias
     assert any(line.get_label().startswith("max_torque = +-0.005") for line in torque.get_lines())
-    assert _close(fig)
+    # three wheels, and the limits as two lines each (+ and -) on the speed and torque panels
+    _shows(fig, "lvlh-hold-wheels: wheels", ["speed of each reaction wheel relative to the body",
+           "axial angular momentum of each reaction wheel", "motor torque of each reaction wheel"], [5, 3, 5])
+
+
+def test_wheel_limits_from_the_wheels_attribute_or_an_older_files_scenario(wheels):
+    """The Dataset carries the wheels' limits (``wheels``, JSON); a file written before it has
+    them read from its stored scenario's TOML, which figure_data reads without importing the
+    scenario package (issue 34: figure_data -> scenario.schema closed an import cycle)."""
+    import ast
+    import json
+
+    from orbatt.dataset import figure_data
+
+    stored = json.loads(wheels.attrs["wheels"])
+    assert [w["max_speed_rad_s"] for w in stored] == [6000 * 2 * np.pi / 60] * 3
+    assert [w["max_torque_N_m"] for w in stored] == [5e-3] * 3
+    np.testing.assert_allclose(stored[2]["speed_rad_s"], 2000 * 2 * np.pi / 60, rtol=1e-15)
+    speed, torque = wheel_limits(wheels)
+    np.testing.assert_allclose(speed, [628.3185307179587] * 3, rtol=1e-15)
+    np.testing.assert_array_equal(torque, [5e-3] * 3)
+    older = wheels.copy()
+    del older.attrs["wheels"]
+    for got, want in zip(wheel_limits(older), (speed, torque)):
+        np.testing.assert_allclose(got, want, rtol=1e-15)
+    del older.attrs["scenario"]
+    assert wheel_limits(older) is None
+    one = wheels.copy()
+    one.attrs["wheels"] = json.dumps([dict(w, max_speed_rad_s=None) for w in stored])  # no speed limit
+    assert np.isnan(wheel_limits(one)[0]).all() and not np.isnan(wheel_limits(one)[1]).any()
+    tree = ast.parse(Path(figure_data.__file__).read_text())
+    imported = [n.module or "" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
+    imported += [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+    assert not [m for m in imported if "scenario" in m], imported
 
 
 def test_torque_budget_and_eclipses(disturbed, bdot):
@@ -247,16 +293,18 @@ def test_torque_budget_and_eclipses(disturbed, bdot):
     assert [line.get_label() for line in ax.get_lines()] == [
         "drag", "gravity gradient", "magnetic", "srp", "total external"]
     assert ax.patches and "eclipse (shadow < 1)" in ax.get_legend_handles_labels()[1]
-    assert "(grey: eclipse)" in fig._suptitle.get_text()
-    assert _close(fig)
+    assert len(ax.patches) == 1  # the run's one eclipse
+    _shows(fig, "cubesat-3u-disturbances: torques (grey: eclipse)",
+           ["torque budget: magnitude of each term (body frame)"], [5])
     fig = F.plot_torques(bdot)  # one external term: no separate total; the dipole below
     top, dip = fig.axes
     assert [line.get_label() for line in top.get_lines()] == ["gravity gradient", "control"]
     assert dip.get_ylabel() == "dipole [A m^2]" and any("max_dipole" in line.get_label() for line in dip.get_lines())
-    assert _close(fig)
+    _shows(fig, "cubesat-bdot-detumble: torques", ["torque budget: magnitude of each term (body frame)",
+           "B-dot magnetic dipole (body components)"], [2, 5])  # three components and +-max_dipole
     fig = F.plot_rates(bdot)  # no shadow variable: no shading
     assert not fig.axes[0].patches
-    assert _close(fig)
+    _shows(fig, "cubesat-bdot-detumble: rates", RATES, [2, 3])
 
 
 def test_ensemble_draws_every_case(ensemble, monkeypatch):
@@ -265,13 +313,15 @@ def test_ensemble_draws_every_case(ensemble, monkeypatch):
     assert len(ax.get_lines()) == 3 and "3 cases, one line each" in ax.get_title()
     for e, line in enumerate(ax.get_lines()):
         np.testing.assert_allclose(line.get_ydata()[1:], np.degrees(pointing_error(ensemble.isel(case=e))[0])[1:])
-    assert _close(fig)
+    _shows(fig, "orbatt attitude propagation (gravity-gradient): pointing",
+           ["attitude relative to the orbital frame (no control); 3 cases, one line each"], [3])
     monkeypatch.setattr(F, "ENSEMBLE_LINES", 2)  # more cases than lines: median and bands, said so
     fig = F.plot_rates(ensemble)
     ax = fig.axes[0]
     # |omega| and the rate relative to the orbital frame: a median line and two bands each
     assert len(ax.collections) == 4 and len(ax.get_lines()) == 2 and "median" in ax.get_title()
-    assert _close(fig)
+    _shows(fig, "orbatt attitude propagation (gravity-gradient): rates",  # no components: one panel
+           ["magnitude of the body rate; 3 cases (over 2: median and bands)"], [2])
     with pytest.raises(ValueError, match="own invariant"):
         F.draw(ensemble, "drift")
 
