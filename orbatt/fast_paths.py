@@ -22,6 +22,8 @@ name                    where                          the public way it replace
                                                        pandas, ~0.3 s) to register ``ds.orbatt``
 ``interpreted-first``   ``orbatt.coldstart``           every ``orbatt run`` compiles (a first run
                                                        of a kind waits for numba)
+``rebound-particles``   ``orbatt.orbits.rebound``      each particle's ``x`` .. ``az`` read as
+                        (``_RAW_READS``)               attributes (ctypes, one field at a time)
 ======================  =============================  ==========================================
 
 **The switch.** ``ORBATT_FAST_PATHS=0`` in the environment (read once, when orbatt is
@@ -33,6 +35,7 @@ arrays are never loaded without them, and the other way round.
 from __future__ import annotations
 
 import os
+import sys
 
 __all__ = ["SWITCH", "ENABLED", "PATHS", "active"]
 
@@ -47,6 +50,7 @@ PATHS = {
     "xarray-direct": ("orbatt.dataset.assembly", "Datasets and time axes built without xarray's checks"),
     "accessor-hook": ("orbatt.xarray_hook", "ds.orbatt registered when xarray is imported, not before"),
     "interpreted-first": ("orbatt.coldstart", "a first run interprets while a warm-up compiles"),
+    "rebound-particles": ("orbatt.orbits.rebound", "REBOUND's particle states read from its memory in one view"),
 }
 
 
@@ -56,5 +60,7 @@ def active() -> dict:
     from .core import fast_paths_in_use
     from .dataset import assembly
 
+    rebound = sys.modules.get("orbatt.orbits.rebound")  # not imported: not used, nor failed, yet
     return {**fast_paths_in_use(), "xarray-direct": bool(assembly.DIRECT), "accessor-hook": ENABLED,
-            "interpreted-first": ENABLED}
+            "interpreted-first": ENABLED,
+            "rebound-particles": ENABLED if rebound is None else rebound.raw_reads_in_use()}

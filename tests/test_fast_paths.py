@@ -47,7 +47,7 @@ def runs(tmp_path_factory):
 def test_the_switch_turns_every_fast_path_off(runs):
     on, off = runs
     assert set(on["active"]) == set(off["active"]) == {"numba-cache-loads", "borrowed-arrays", "xarray-direct",
-                                                       "accessor-hook", "interpreted-first"}
+                                                       "accessor-hook", "interpreted-first", "rebound-particles"}
     assert not any(off["active"].values()), off["active"]
     # where the libraries are the ones they were written for (the versions pinned here), all on
     assert all(on["active"].values()), on["active"]

@@ -259,3 +259,39 @@ def test_environment_torques_on_a_rebound_orbit_sampled_over_the_run_only():
         assert np.abs(a[:, k] - b[:, k]).max() < 1e-9 * np.abs(b[:, k]).max(), name
     with pytest.raises(InputError, match="t_end: .* outside the span .* larger t_end"):
         EnvironmentTorques(reb, 2 * u.h, **kw)
+
+
+def test_particle_reads_fenced_the_public_way_gives_the_same_bits(paper, monkeypatch):
+    """The fast path ``rebound-particles`` (orbatt.fast_paths) reads the particles from
+    REBOUND's memory; its check against the attributes passes with this REBOUND, and the
+    attributes alone give the same samples bit for bit (issue 34)."""
+    from orbatt import fast_paths
+    from orbatt.orbits import rebound as orb
+
+    assert "rebound-particles" in fast_paths.PATHS and "rebound-particles" in fast_paths.active()
+    monkeypatch.setitem(orb._RAW_READS, "ok", None if fast_paths.ENABLED else False)
+    fast = ReboundOrbit(paper, paper.period_value * u.s, perturbations=("j2",)).samples
+    assert orb._RAW_READS["ok"] is fast_paths.ENABLED and orb.raw_reads_in_use() is fast_paths.ENABLED
+    monkeypatch.setitem(orb._RAW_READS, "ok", False)
+    public = ReboundOrbit(paper, paper.period_value * u.s, perturbations=("j2",)).samples
+    assert fast.shape == public.shape and fast.tobytes() == public.tobytes()
+    assert not fast_paths.active()["rebound-particles"]
+
+
+def test_particle_reads_turn_to_the_attributes_where_the_memory_disagrees(paper, monkeypatch):
+    """A REBOUND whose particle struct no longer starts with x .. az: the first check sees it,
+    the path turns off for the process, and the samples are the attributes' (still right)."""
+    from orbatt.orbits import rebound as orb
+
+    monkeypatch.setitem(orb._RAW_READS, "ok", False)
+    want = ReboundOrbit(paper, 0.5 * paper.period_value * u.s, integrator="whfast").samples
+    real = orb._raw_view
+    monkeypatch.setattr(orb, "_raw_view", lambda sim, n: real(sim, n)[:, ::-1])  # another field order
+    monkeypatch.setitem(orb._RAW_READS, "ok", None)
+    got = ReboundOrbit(paper, 0.5 * paper.period_value * u.s, integrator="whfast").samples
+    assert orb._RAW_READS["ok"] is False and not orb.raw_reads_in_use()
+    assert got.tobytes() == want.tobytes()
+    monkeypatch.setattr(orb, "_raw_view", lambda sim, n: (_ for _ in ()).throw(AttributeError("_particles")))
+    monkeypatch.setitem(orb._RAW_READS, "ok", None)  # a REBOUND without the private array
+    assert ReboundOrbit(paper, 0.5 * paper.period_value * u.s, integrator="whfast").samples.tobytes() == want.tobytes()
+    assert orb._RAW_READS["ok"] is False

@@ -11,6 +11,7 @@ import numpy as np
 from astropy import constants as const
 from astropy import units as u
 
+from .. import fast_paths
 from .. import units as U
 from ..core import sampled as ks
 from ..epoch import epoch_string
@@ -31,6 +32,36 @@ GM_SUN = float(const.GM_sun.to_value(U.GM))
 
 PERTURBATIONS = ("j2", "moon", "sun")
 INTEGRATORS = ("ias15", "whfast")
+
+#: what a sample reads of each particle, in the order of REBOUND's ``reb_particle`` struct
+PARTICLE_FIELDS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az")
+#: the fast path ``rebound-particles`` (:mod:`orbatt.fast_paths`): the particles' states read
+#: from REBOUND's particle array in memory through ctypes (its private ``sim._particles``; the
+#: struct's first nine doubles are :data:`PARTICLE_FIELDS`) instead of attribute by attribute.
+#: None until its first use checks it against the attributes, bit for bit; False after a
+#: mismatch or a failure (the attributes for the rest of the process), or with the switch off
+_RAW_READS = {"ok": None if fast_paths.ENABLED else False}
+
+
+def raw_reads_in_use() -> bool:
+    """Whether the ``rebound-particles`` fast path may be used (not turned off, not failed)."""
+    return _RAW_READS["ok"] is not False
+
+
+def _particle_states(sim, indices):
+    """``(len(indices), 9)``: :data:`PARTICLE_FIELDS` of those particles, read the public way."""
+    return np.array([[getattr(sim.particles[k], f) for f in PARTICLE_FIELDS] for k in indices], dtype=np.float64)
+
+
+def _raw_view(sim, nbody):
+    """The particle array as a ``(N, stride)`` float64 view of REBOUND's memory (or None where
+    the struct is not a whole number of doubles holding :data:`PARTICLE_FIELDS` first)."""
+    size = ctypes.sizeof(type(sim._particles.contents))
+    if size % 8 or size // 8 < len(PARTICLE_FIELDS):
+        return None
+    stride = size // 8
+    buf = (ctypes.c_double * (nbody * stride)).from_address(ctypes.addressof(sim._particles.contents))
+    return np.frombuffer(buf, dtype=np.float64).reshape(nbody, stride)
 
 
 class ReboundOrbit(SampledOrbit):
@@ -332,28 +363,38 @@ class ReboundOrbit(SampledOrbit):
         (the simulation's units; ``gm`` and ``period`` in them): rows ``t - t0, x, v, a``."""
         ip, ic = pair
         t0 = sim.t
-        size = ctypes.sizeof(type(sim._particles.contents))
-        stride = size // 8
         nbody = sim.N
         cache = {}
 
-        def view():
-            addr = ctypes.addressof(sim._particles.contents)
-            if cache.get("addr") != addr:
-                buf = (ctypes.c_double * (nbody * stride)).from_address(addr)
-                cache["addr"] = addr
-                cache["v"] = np.frombuffer(buf, dtype=np.float64).reshape(nbody, stride)
-            return cache["v"]
+        def states():
+            """``(2, >= 9)``: the states of particles ``ip`` and ``ic`` - from the fast path's
+            view of REBOUND's memory (checked against the attributes on its first use in the
+            process), else from the attributes (``_RAW_READS``)."""
+            if _RAW_READS["ok"] is not False:
+                try:
+                    addr = ctypes.addressof(sim._particles.contents)
+                    if cache.get("addr") != addr:  # the array moved (or a first read)
+                        cache["addr"], cache["v"] = addr, _raw_view(sim, nbody)
+                    raw = None if cache["v"] is None else cache["v"][[ip, ic]]
+                    if raw is not None and _RAW_READS["ok"] is None:
+                        _RAW_READS["ok"] = bool(np.array_equal(raw[:, :len(PARTICLE_FIELDS)],
+                                                               _particle_states(sim, (ip, ic))))
+                except (AttributeError, TypeError, ValueError):  # a REBOUND without the private array
+                    raw = None
+                if raw is not None and _RAW_READS["ok"]:
+                    return raw
+                _RAW_READS["ok"] = False
+            return _particle_states(sim, (ip, ic))
 
         def record(rows):
             ignore = sim.gravity_ignore
             sim.gravity_ignore = 0  # WHFast skips the Keplerian term; we want all of it
             clib.reb_simulation_update_acceleration(ctypes.byref(sim))
             sim.gravity_ignore = ignore
-            v = view()
+            p, c = states()
             row = np.empty(ks.TABLE_COLUMNS)
             row[0] = sim.t - t0
-            row[1:] = v[ip, :9] - v[ic, :9]  # x, y, z, vx, vy, vz, ax, ay, az relative to the centre
+            row[1:] = p[:9] - c[:9]  # x, y, z, vx, vy, vz, ax, ay, az relative to the centre
             rows.append(row)
             return row
 
