@@ -104,3 +104,46 @@ def test_no_unmarked_or_old_citation():
             for m in rx.finditer(text):
                 bad.append(f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}: {m.group(0)!r}")
     assert not bad, "cite docs/design.md §N instead:\n" + "\n".join(bad)
+
+
+def _module_map():
+    """The files ``docs/design.md`` §8's module map names, as paths under ``orbatt/``: a line
+    ``  name.py ...`` (or ``  a.py, b.py  ...``) is a top-level module, ``  folder/ a.py, b.py``
+    and its continuation lines (starting with a file) list a package's modules, and the lines
+    indented under ``  core/`` are ``core/``'s."""
+    text = _text(DOC).split("**Module map**", 1)[1].split("```", 2)[1]
+    files, folder = [], None
+    for line in text.splitlines()[1:]:  # after the "orbatt/" line
+        tokens = line.split()
+        if not tokens:
+            continue
+        indent = len(line) - len(line.lstrip())
+        leading = []
+        for tok in tokens:
+            if not tok.rstrip(",").endswith(".py"):
+                break
+            leading.append(tok.rstrip(","))
+        if indent == 2 and tokens[0].endswith("/"):
+            folder = tokens[0]
+            files += [folder + t.rstrip(",") for t in tokens[1:] if t.rstrip(",").endswith(".py")]
+        elif indent == 2:
+            folder = None
+            files += leading
+        elif indent == 4 and folder == "core/":
+            files += ["core/" + t for t in leading]
+        elif folder is not None and leading:
+            files += [folder + t for t in leading]
+    return files
+
+
+def test_the_module_map_is_the_tree():
+    """§8's module map names every module of the package (``__init__.py`` aside) and no file
+    that is not there (issue 34: it described files that were not in the tree)."""
+    files = _module_map()
+    assert len(files) >= 100 and "core/rk_loop.py" in files and "dataset/netcdf_direct.py" in files
+    missing = [f for f in files if not (ROOT / "orbatt" / f).is_file()]
+    assert not missing, f"docs/design.md §8's module map names files that are not in orbatt/: {missing}"
+    tree = sorted(str(p.relative_to(ROOT / "orbatt")) for p in (ROOT / "orbatt").rglob("*.py")
+                  if p.name != "__init__.py")
+    unnamed = [f for f in tree if f not in files]
+    assert not unnamed, f"modules of orbatt/ that docs/design.md §8's module map does not name: {unnamed}"
