@@ -132,6 +132,27 @@ class ReactionWheel:
                 f"speed={self.speed_rad_s:.6g} rad/s)")
 
 
+#: the shortest flight-software period (s) and the longest: a law at more than a MHz, or held
+#: for more than a year, describes no flight software
+PERIOD_RANGE = (1e-6, 3.2e7)
+
+
+def _period(period):
+    """The flight-software period in s (None: a continuous law), checked."""
+    v = _value(period, u.s, "period", positive=True, allow_none=True)
+    if v is not None and not PERIOD_RANGE[0] <= v <= PERIOD_RANGE[1]:
+        raise InputError(f"period: {v:.6g} s is outside [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}] s; give the flight "
+                         "software's rate as its period (e.g. '0.1 s' for 10 Hz), or leave it out for a continuous law")
+    return v
+
+
+def command_slots(period, wheels):
+    """The flight-software slots of a law's kernel row (:func:`orbatt.core.control.flight_software`):
+    its ``period`` in s (None: continuous, 0), ticks from ``t = 0``, and its held command after
+    the ``wheels``' momenta in the state."""
+    return {"period": 0.0 if period is None else period, "phase": 0.0, "z0": 8 + len(wheels)}
+
+
 def wheels_row(wheels):
     """The :data:`~orbatt.core.model.WHEELS` row ``(kind, params, None)`` of a list of wheels
     (internal units)."""
@@ -168,13 +189,18 @@ class PDControl:
         from the orbital frame such as a roll, default identity).
     target_axis : 3 floats, optional
         The unit body axis to point at the Sun (``target = "sun"``, required).
+    period : Quantity (time), optional
+        The flight software's period: the law is evaluated at the ticks ``t_k = k period`` (time
+        since the epoch: the time axis of the run) on the state at ``t_k``, and its command (the
+        torque, or the wheels' motor torques) is held until the next tick (zero-order hold).
+        Default: a continuous law, evaluated at every instant.
     """
 
     #: the law's name; its ``[control]`` keys are described once in :data:`orbatt.laws.LAWS`
     law = "pd"
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
-                 target_axis=None):
+                 target_axis=None, period=None):
         if target not in TARGETS:
             raise InputError(f"target: {target!r} is not one of {', '.join(map(repr, TARGETS))}")
         if actuator not in ACTUATORS:
@@ -183,6 +209,7 @@ class PDControl:
         self.kp = _value(kp, u.N * u.m, "kp", nonnegative=True)
         self.kd = _value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
         self.max_torque = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
+        self.period = _period(period)
         self.target_q = self.target_axis = None
         if target == "inertial" and target_q is None:
             raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
@@ -210,7 +237,8 @@ class PDControl:
         self.check_wheels(wheels)
         axes = np.array([w.axis for w in wheels]) if self.actuator == "wheels" else None
         params = kc.pd_params(TARGETS[self.target], U.to_kernel(self.kp, "torque"),
-                              U.to_kernel(self.kd, "torque_time"), tmax, values, axes)
+                              U.to_kernel(self.kd, "torque_time"), tmax, values, axes,
+                              **command_slots(self.period, wheels))
         return (km.PD_CONTROL, params, sun_table)
 
     def check_wheels(self, wheels):
@@ -230,7 +258,7 @@ class PDControl:
         :func:`orbatt.laws.control_law` makes this law of again."""
         return {"law": self.law, "target": self.target, "kp": self.kp, "kd": self.kd, "max_torque": self.max_torque,
                 "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
-                "target_axis": None if self.target_axis is None else self.target_axis.tolist()}
+                "target_axis": None if self.target_axis is None else self.target_axis.tolist(), "period": self.period}
 
     @property
     def reads_orbit(self):
@@ -254,6 +282,8 @@ class PDControl:
     def describe(self):
         d = {"law": "pd", "target": self.target, "kp_N_m": self.kp, "kd_N_m_s": self.kd,
              "max_torque_N_m": self.max_torque, "actuator": self.actuator}
+        if self.period is not None:
+            d["period_s"] = self.period
         if self.target_q is not None:
             d["target_q"] = self.target_q.tolist()
         if self.target_axis is not None:
@@ -274,38 +304,49 @@ class BDotControl:
     gain : Quantity (A m^2 s / T)
     max_dipole : Quantity (A m^2)
         The magnetorquers' limit per axis.
+    period : Quantity (time), optional
+        The flight software's period: the dipole is computed at the ticks ``k period`` and held
+        until the next (zero-order hold; the torque ``m x B(t)`` follows the field). Default:
+        continuous.
     """
 
     #: the law's name; its ``[control]`` keys are described once in :data:`orbatt.laws.LAWS`
     law = "bdot"
 
-    def __init__(self, gain, max_dipole):
+    def __init__(self, gain, max_dipole, *, period=None):
         self.gain = _value(gain, u.A * u.m**2 * u.s / u.T, "gain", nonnegative=True)
         self.max_dipole = _value(max_dipole, u.A * u.m**2, "max_dipole", positive=True)
+        self.period = _period(period)
 
-    def row(self, field_table):
+    def row(self, field_table, wheels=()):
         """The :data:`~orbatt.core.model.BDOT_CONTROL` row with the field along the orbit
-        (T, inertial; a piece table of :mod:`orbatt.core.environment`)."""
+        (T, inertial; a piece table of :mod:`orbatt.core.environment`) for a body with
+        ``wheels`` (its held dipole follows their momenta in the state)."""
         return (km.BDOT_CONTROL, kc.bdot_params(U.to_kernel(self.gain, "dipole_gain"),
-                                                U.to_kernel(self.max_dipole, "dipole")), field_table)
+                                                U.to_kernel(self.max_dipole, "dipole"),
+                                                **command_slots(self.period, wheels)), field_table)
 
     def check_wheels(self, wheels):
         """Nothing to refuse: the magnetorquers act whatever the wheels."""
 
     def settings(self):
         """The plain settings that :func:`orbatt.laws.control_law` makes this law of again."""
-        return {"law": self.law, "gain": self.gain, "max_dipole": self.max_dipole}
+        return {"law": self.law, "gain": self.gain, "max_dipole": self.max_dipole, "period": self.period}
 
     #: B-dot reads the magnetic field along the orbit
     reads_orbit = True
 
     def model_row(self, wheels, tables):
-        """The law's model row (:meth:`row`; ``wheels`` unused); ``tables(name)`` gives the
+        """The law's model row (:meth:`row`; ``wheels``: where its held command lies in the
+        state); ``tables(name)`` gives the
         magnetic field along the orbit (``"field"``, :meth:`orbatt.EnvironmentTorques.field_table`)."""
-        return self.row(tables("field"))
+        return self.row(tables("field"), wheels)
 
     def describe(self):
-        return {"law": "bdot", "gain_A_m2_s_per_T": self.gain, "max_dipole_A_m2": self.max_dipole}
+        d = {"law": "bdot", "gain_A_m2_s_per_T": self.gain, "max_dipole_A_m2": self.max_dipole}
+        if self.period is not None:
+            d["period_s"] = self.period
+        return d
 
     def __repr__(self):
         return f"BDotControl(gain={self.gain:.4g} A m^2 s/T, max_dipole={self.max_dipole:.4g} A m^2)"

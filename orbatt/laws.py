@@ -33,10 +33,10 @@ from typing import Callable
 
 from astropy import units as u
 
-from .control import ACTUATORS, TARGETS, BDotControl, PDControl
+from .control import ACTUATORS, PERIOD_RANGE, TARGETS, BDotControl, PDControl
 from .errors import InputError
 
-__all__ = ["LawKey", "LawVar", "Law", "LAWS", "LAW_CLASSES", "CONTROL_KEYS", "control_law", "law_of",
+__all__ = ["LawKey", "LawVar", "Law", "COMMON_KEYS", "LAWS", "LAW_CLASSES", "CONTROL_KEYS", "control_law", "law_of",
            "control_key_docs", "control_ranges"]
 
 
@@ -165,6 +165,14 @@ def _bdot_scales(s, inertia, b):
     return [(gain * b * b / inertia, "[control] gain", f"B-dot's damping rate (gain = {gain:.3g} A m2 s/T)")]
 
 
+#: the keys every law takes: the flight software's rate
+COMMON_KEYS = (LawKey("period", "time", "none (continuous)",
+                      "the flight software's period: the law is evaluated at t_k = k period (time since the epoch) on "
+                      "the state at t_k and its command (torque, wheels' motor torques, dipole) held until the next "
+                      "tick (zero-order hold); none: a continuous law", unit="s", range=PERIOD_RANGE,
+                      sign="positive"),)
+
+
 PD = Law(
     "pd", "the PD law", "quaternion PD feedback", PDControl,
     (LawKey("target", " | ".join(map(repr, TARGETS)), "'orbital'",
@@ -183,7 +191,7 @@ PD = Law(
             "target attitude [w, x, y, z], body -> inertial; with target = 'orbital' (optional) the held attitude "
             "relative to the orbital frame", "vector", size=4),
      LawKey("target_axis", "plain, 3 values", "required for sun", "unit body axis to point at the Sun", "vector",
-            size=3)),
+            size=3)) + COMMON_KEYS,
     fields=_pd_fields, holds_frame=lambda s: s.get("target") in ("orbital", "inertial"), time_scales=_pd_scales,
     reads_orbit=lambda s: s.get("target") != "inertial")
 
@@ -192,7 +200,7 @@ BDOT = Law(
     (LawKey("gain", "A m2 s / T", "required", "m = -gain dB/dt (body axes); reads [environment] magnetic_field",
             unit="A m2 s / T", range=(0.0, 1e12), sign="nonnegative", required=True),
      LawKey("max_dipole", "magnetic moment (A m2)", "required", "per-axis limit of the dipole", unit="A m2",
-            range=(1e-9, 1e5), sign="positive", required=True)),
+            range=(1e-9, 1e5), sign="positive", required=True)) + COMMON_KEYS,
     variables=(LawVar("dipole_control", "dipole", "dipole", "A m^2", "B-dot magnetic dipole (body components)"),),
     fields=lambda s: ("field",), time_scales=_bdot_scales)
 

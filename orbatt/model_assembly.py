@@ -26,10 +26,11 @@ import numpy as np
 
 from .control import wheels_row
 from .laws import LAW_CLASSES
+from .core import control as kc
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["KernelSpec", "assemble", "control_of", "model_rows"]
+__all__ = ["KernelSpec", "assemble", "command_size", "control_of", "model_rows"]
 
 
 class KernelSpec(NamedTuple):
@@ -39,6 +40,15 @@ class KernelSpec(NamedTuple):
     terms: np.ndarray
     params: np.ndarray
     table: np.ndarray
+
+
+def command_size(model):
+    """The number of state components that hold the flight software's commands (issue 32):
+    the ``nz`` slots of the model's control rows (0 without a law that has a period), after
+    ``q, Q`` and the wheels' momenta."""
+    terms, params, _ = model
+    return sum(int(params[terms[j, km.P0] + kc.CTL_NZ]) for j in range(1, terms.shape[0])
+               if int(terms[j, km.KIND]) in (km.PD_CONTROL, km.BDOT_CONTROL))
 
 
 def model_rows(model):

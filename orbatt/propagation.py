@@ -31,7 +31,7 @@ import numpy as np
 
 from .core import INTERPRETED
 from .errors import InputError, IntegrationError
-from .model_assembly import control_of
+from .model_assembly import command_size, control_of
 from .methods import METHODS, Method, methods, register
 from .methods.base import resolve_method
 from .methods.problem import (DEFAULT_MAX_STEPS, MIN_RTOL, Problem, bodies_of, check_extended, initial_states,
@@ -122,6 +122,12 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     control = control_of(potential, control)
     kernel = kernel_spec(potential, bodies, control)
     check_extended(cls, kernel)
+    nz = command_size(kernel)
+    if nz:  # the flight software's held commands: unset (NaN) until the first tick, at the start
+        if not getattr(cls, "ticks", False):
+            raise InputError(f"method: {cls.name!r} cannot run a control law with a flight-software period (its "
+                             "ticks are knots of the compiled step loop); use method = 'dop853' or 'vern98'")
+        y0 = np.ascontiguousarray(np.hstack([y0, np.full((y0.shape[0], nz), np.nan)]))
     t0, t_end, tv = time_span(t, t_span, bodies[0], potential)
     rtol, atol, stepv, max_steps = method_settings(cls, rtol, atol, step, max_steps, bodies[0])
     progress = progress_callback(progress)
@@ -140,9 +146,11 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
             stats["stopped"] = reason
         if not ensemble:
             Y = Y[0]
+        nw = Y.shape[-1] - 8 - nz
         return Trajectory(body=bodies[0], potential=potential, control=control, t=np.array(tt, dtype=np.float64),
                           q=np.ascontiguousarray(Y[..., :4]), Q=np.ascontiguousarray(Y[..., 4:8]),
-                          wheel_momenta=np.ascontiguousarray(Y[..., 8:]) if Y.shape[-1] > 8 else None,
+                          wheel_momenta=np.ascontiguousarray(Y[..., 8:8 + nw]) if nw else None,
+                          command=np.ascontiguousarray(Y[..., 8 + nw:]) if nz else None,
                           inertia=inertia if body_ensemble else inertia[0].copy(), method=m.name,
                           settings=m.settings(), stats=stats, complete=complete)
 

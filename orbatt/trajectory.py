@@ -38,6 +38,10 @@ class Trajectory:
         computed.
     wheel_momenta : ndarray (N, n) or (E, N, n), or None
         The reaction wheels' axial momenta ``h`` (kg km^2/s) of a body with wheels.
+    command : ndarray (N, nz) or (E, N, nz), or None
+        The commands the flight software holds (a law with a ``period``, issue 32), in kernel
+        units: the PD law's torque (3) or its wheels' motor torques (one per wheel), B-dot's
+        dipole (3); at an output time on a tick, the command issued there.
     control : PDControl or BDotControl, or None
         The control law in the loop (given to :func:`orbatt.propagate` beside the potential,
         or carried by it: :func:`orbatt.model_assembly.control_of`).
@@ -55,10 +59,20 @@ class Trajectory:
     complete: bool = True
     wheel_momenta: np.ndarray = None
     control: object = None
+    command: np.ndarray = None
 
     def __post_init__(self):
         if self.control is None:  # a law the potential carries (EnvironmentTorques(control=))
             self.control = getattr(self.potential, "control", None)
+
+    @property
+    def extended(self):
+        """The state after ``Q`` (the kernels' ``y[8:]``): the wheels' momenta, then the held
+        commands, as one array ``(..., N, n + nz)``; None for a rigid body without them."""
+        parts = [x for x in (self.wheel_momenta, self.command) if x is not None]
+        if not parts:
+            return None
+        return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
 
     @property
     def orbit(self):

@@ -52,10 +52,19 @@ from .slots import Slots
 TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN = 0, 1, 2
 #: actuators of the PD law
 ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
+#: the slots every control law's row starts with (the flight software, issue 32): its
+#: ``period`` (s; 0: a continuous law), the origin ``phase`` of its tick grid (``t_k = phase +
+#: k period``), where its held command lies in the state (``z0``: ``y[z0:z0 + nz]``, after the
+#: wheels' momenta) and its size ``nz`` (0 for a continuous law)
+FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1))
 #: the parameter layouts (module docstring): one wheel, the PD law, B-dot
 WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1))
-PD = Slots(("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4), tail="pinv")
-BDOT = Slots(("gain", 1), ("max_dipole", 1))
+PD = Slots(*FLIGHT_SOFTWARE, ("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4),
+           tail="pinv")
+BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
+#: the flight-software slots, the same in every law's row
+CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ = PD.period, PD.phase, PD.z0, PD.nz
+assert (BDOT.period, BDOT.phase, BDOT.z0, BDOT.nz) == (CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ)
 #: the floats of one wheel, and of the PD law before the wheels' pseudo-inverse
 WHEEL_SIZE = WHEEL.size
 PD_HEADER = PD.size
@@ -79,19 +88,34 @@ def wheel_params(axes, inertia, max_torque, max_speed):
     return np.concatenate([[float(n)], *rows])
 
 
-def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None):
+def flight_software(period=0.0, phase=0.0, z0=8):
+    """The flight-software slots of a law's row (:data:`FLIGHT_SOFTWARE`) but ``nz``: a
+    continuous law (``period = 0``) or one evaluated at the ticks ``phase + k period`` whose
+    command is held in ``y[z0:]``."""
+    if not (period >= 0.0 and np.isfinite(period)):
+        raise ValueError(f"period: {period!r} must be finite and >= 0")
+    return dict(period=float(period), phase=float(phase), z0=float(z0))
+
+
+def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None, period=0.0,
+              phase=0.0, z0=8):
     """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
     :data:`TARGET_ORBITAL`, :data:`TARGET_INERTIAL`, :data:`TARGET_SUN`; ``target_values``:
     the target quaternion (relative to the orbital frame for ``TARGET_ORBITAL``; default
     identity) or the body axis (padded to 4); ``wheel_axes (n, 3)``: actuate with
-    these wheels (their axes must span the three dimensions), else an ideal torque."""
+    these wheels (their axes must span the three dimensions), else an ideal torque;
+    ``period, phase, z0``: :func:`flight_software` (the held command: the torque, 3, or the
+    wheels' motor torques, n)."""
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
     if target != TARGET_SUN and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
         raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
+    fs = flight_software(period, phase, z0)
+    nz = 3 if wheel_axes is None else np.asarray(wheel_axes).reshape(-1, 3).shape[0]
     head = dict(target=float(target), kp=kp, kd=kd, max_torque=max_torque,
-                actuator=ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, c=c)
+                actuator=ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, c=c,
+                nz=float(nz) if fs["period"] > 0 else 0.0, **fs)
     if wheel_axes is None:
         return PD.pack(**head)
     A = np.asarray(wheel_axes, dtype=np.float64).reshape(-1, 3).T  # (3, n)
@@ -100,9 +124,11 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     return PD.pack(tail=np.linalg.pinv(A), **head)
 
 
-def bdot_params(gain, max_dipole):
-    """The parameters of a :data:`~orbatt.core.model.BDOT_CONTROL` row (:data:`BDOT`)."""
-    return BDOT.pack(gain=gain, max_dipole=max_dipole)
+def bdot_params(gain, max_dipole, period=0.0, phase=0.0, z0=8):
+    """The parameters of a :data:`~orbatt.core.model.BDOT_CONTROL` row (:data:`BDOT`;
+    ``period, phase, z0``: :func:`flight_software`, the held command: the dipole, 3)."""
+    fs = flight_software(period, phase, z0)
+    return BDOT.pack(gain=gain, max_dipole=max_dipole, nz=3.0 if fs["period"] > 0 else 0.0, **fs)
 
 
 @jit_inline
@@ -201,19 +227,26 @@ def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
 
 
 @jit_inline
-def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
-    """Make the body torque ``tau`` with the wheels: the motor torques ``u`` (written; one per
-    wheel, clipped to the motor and speed limits) and the torque the body feels, ``-A u``
-    (returned). ``y[8 + k]`` is wheel ``k``'s axial momentum; the pseudo-inverse is in the PD
-    row's tail (:data:`PD` ``pinv``), the wheels from ``params[wheels0]``."""
-    nw = u.shape[0]
-    tb = (0.0, 0.0, 0.0)
-    for k in range(nw):
+def wheel_commands(tau, params, pd0, wheels0, u):
+    """The wheels' motor torques ``u`` (written, one per wheel) that make the body torque
+    ``tau``: ``-A+ tau``, each clipped to its motor's limit (the PD row's tail, :data:`PD`
+    ``pinv``; the wheels from ``params[wheels0]``)."""
+    for k in range(u.shape[0]):
         pk = pd0 + _PD_PINV + 3 * k
         uk = -(params[pk] * tau[0] + params[pk + 1] * tau[1] + params[pk + 2] * tau[2])
+        u[k] = clip(uk, params[wheels0 + 1 + WHEEL_SIZE * k + _W_UMAX])
+
+
+@jit_inline
+def wheel_reaction(omega, y, params, wheels0, u):
+    """The torque the body feels from the motor torques ``u`` (a command, held or not):
+    ``-A u``, after zeroing (in ``u``) a torque that would push a wheel past its speed limit.
+    ``y[8 + k]`` is wheel ``k``'s axial momentum."""
+    tb = (0.0, 0.0, 0.0)
+    for k in range(u.shape[0]):
         w = wheels0 + 1 + WHEEL_SIZE * k
         a = (params[w + _W_AXIS], params[w + _W_AXIS + 1], params[w + _W_AXIS + 2])
-        uk = clip(uk, params[w + _W_UMAX])
+        uk = u[k]
         speed = y[8 + k] / params[w + _W_IW] - (a[0] * omega[0] + a[1] * omega[1] + a[2] * omega[2])
         smax = params[w + _W_SMAX]
         if (speed >= smax and uk > 0.0) or (speed <= -smax and uk < 0.0):
@@ -221,6 +254,15 @@ def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
         u[k] = uk
         tb = (tb[0] - uk * a[0], tb[1] - uk * a[1], tb[2] - uk * a[2])
     return tb
+
+
+@jit_inline
+def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
+    """Make the body torque ``tau`` with the wheels: the motor torques ``u`` (written; one per
+    wheel, clipped to the motor and speed limits: :func:`wheel_commands`, then
+    :func:`wheel_reaction`) and the torque the body feels, ``-A u`` (returned)."""
+    wheel_commands(tau, params, pd0, wheels0, u)
+    return wheel_reaction(omega, y, params, wheels0, u)
 
 
 @jit_inline

@@ -18,18 +18,23 @@ the control laws of :mod:`orbatt.core.control` added.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
-from .model import BDOT_CONTROL, FLAGS, KIND, P0, PD_CONTROL, R0, R1, WHEELS, orbit_at, orbit_radial, terms_at
-from .qalg import qconj, qmul, qmul_pure
+from .model import (BDOT_CONTROL, FLAGS, KIND, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, R0, R1, WHEELS, orbit_at,
+                    orbit_radial, terms_at)
+from .kepler import anomaly_of_time, time_of_anomaly
+from .qalg import qconj, qmul, qmul_pure, rotate_inv
 from .torques import gradient_of_torque
 
 # the slot offsets (orbatt.core.control's layouts) as module constants, folded by numba
 _W_AXIS, _W_IW = ctl.WHEEL.axis, ctl.WHEEL.iw
 _PD_ACTUATOR = ctl.PD_ACTUATOR
+_CTL_PERIOD, _CTL_PHASE, _CTL_Z0, _CTL_NZ = ctl.CTL_PERIOD, ctl.CTL_PHASE, ctl.CTL_Z0, ctl.CTL_NZ
 
 
 @jit_inline
@@ -79,11 +84,21 @@ def body_rate(g, y, inertia, params, w0):
 
 
 @jit_inline
+def wheel_count(params, w0):
+    """The number of reaction wheels (``w0``: :func:`wheel_row`)."""
+    return 0 if w0 < 0 else int(params[w0])
+
+
+@jit_inline
 def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, v):
     """``(tau_ext, tau_applied, m)``: the external control torque (ideal PD and B-dot, body
     axes), the torque the control applies to the body (external or the wheels' reaction),
     and the B-dot dipole, for the orbit's ``r, xhat, v`` at ``t`` (:func:`orbit_radial`);
-    the wheels' motor torques go into ``u`` (zero without a wheel-actuated law)."""
+    the wheels' motor torques go into ``u`` (zero without a wheel-actuated law). A law with a
+    flight-software period (``params[p0 + CTL_PERIOD] > 0``) applies the command it holds in
+    ``y[z0:z0 + nz]`` (the torque, the motor torques or the dipole; :func:`tick` wrote it)
+    instead of evaluating itself; the wheels' speed limits and the field ``B(t)`` act at every
+    instant."""
     for k in range(u.shape[0]):
         u[k] = 0.0
     ext = (0.0, 0.0, 0.0)
@@ -94,12 +109,25 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
         kind = terms[j, KIND]
         p0 = terms[j, P0]
         if kind == PD_CONTROL:
+            wheels = params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS
+            if params[p0 + _CTL_PERIOD] > 0.0:
+                z0 = int(params[p0 + _CTL_Z0])
+                if wheels:
+                    for k in range(u.shape[0]):
+                        u[k] = y[z0 + k]
+                    tb = ctl.wheel_reaction(omega, y, params, w0, u)
+                    app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
+                else:
+                    tau = (y[z0], y[z0 + 1], y[z0 + 2])
+                    ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
+                    app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+                continue
             sun = (0.0, 0.0, 0.0)
             if terms[j, R1] > terms[j, R0]:
                 s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
                 sun = (s4[0], s4[1], s4[2])
             tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
-            if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
+            if wheels:
                 tb = ctl.wheel_torques(tau, omega, y, params, p0, w0, u)
                 app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
             else:
@@ -107,7 +135,12 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
         elif kind == BDOT_CONTROL:
             b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
-            m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
+            if params[p0 + _CTL_PERIOD] > 0.0:
+                z0 = int(params[p0 + _CTL_Z0])
+                m = (y[z0], y[z0 + 1], y[z0 + 2])
+                b = rotate_inv(q, b_s)
+            else:
+                m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
             tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
             ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
             app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
@@ -128,13 +161,16 @@ def extended_rates(t, dtds, r, xhat, v, y, inertia, terms, params, table, work, 
     qd = qmul_pure(q, a)
     Qd = qmul_pure(Q, a)
     _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
-    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:], r, xhat, v)
+    nw = wheel_count(params, w0)
+    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:8 + nw], r, xhat, v)
     Gc = gradient_of_torque(q, ext)
     for k in range(4):
         dy[k] = dtds * (0.25 * qd[k])
         dy[4 + k] = dtds * (0.25 * Qd[k] - G[k] - Gc[k])
-    for k in range(8, y.shape[0]):  # the wheels' rates (control_torques wrote dh/dt)
+    for k in range(8, 8 + nw):  # the wheels' rates (control_torques wrote dh/dt)
         dy[k] *= dtds
+    for k in range(8 + nw, y.shape[0]):  # the held commands: constant between ticks
+        dy[k] = 0.0
 
 
 @jit
@@ -164,13 +200,20 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
     ``tau (N, 3)``, the B-dot dipole ``m (N, 3)`` and the motor torques ``u (N, n)`` (for the
     outputs of a result)."""
     N = Y.shape[0]
-    nw = Y.shape[1] - 8
+    w0 = wheel_row(terms)
+    nw = wheel_count(params, w0)
+    nz = 0
+    for j in range(1, terms.shape[0]):
+        if terms[j, KIND] == PD_CONTROL or terms[j, KIND] == BDOT_CONTROL:
+            nz += int(params[terms[j, P0] + _CTL_NZ])
+    if Y.shape[1] != 8 + nw + nz:
+        raise ValueError("evaluate_extended: the states lack the wheels' momenta or the flight software's held "
+                         "commands of the model (8 + wheels + commands columns)")
     omega = np.empty((N, 3))
     h = np.empty((N, 3))
     tau = np.empty((N, 3))
     m = np.empty((N, 3))
     u = np.zeros((N, nw))
-    w0 = wheel_row(terms)
     for i in range(N):
         y = Y[i]
         q = (y[0], y[1], y[2], y[3])
@@ -184,3 +227,115 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
             tau[i, k] = app[k]
             m[i, k] = mi[k]
     return omega, h, tau, m, u
+
+
+# ---------------------------------------------------------------------------------------
+# The flight software's ticks (issue 32): laws evaluated at t_k = phase + k period, held
+
+
+@jit_inline
+def _grid_after(t, phase, period):
+    """The first tick ``phase + k period`` strictly after ``t`` (``k`` an integer; the same
+    expression for every caller, so that a landing time compares equal)."""
+    k = math.floor((t - phase) / period) + 1.0
+    tk = phase + k * period
+    while tk <= t:
+        k += 1.0
+        tk = phase + k * period
+    return tk
+
+
+@jit_inline
+def _on_grid(s, t, phase, period, terms, params):
+    """Whether ``s`` (the independent variable; ``t`` its time) is a tick ``phase + k period``
+    as :func:`next_tick` gives them (in the eccentric anomaly: the tick's anomaly)."""
+    k = math.floor((t - phase) / period + 0.5)
+    tk = phase + k * period
+    if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
+        return anomaly_of_time(tk, params[terms[0, P0]:terms[0, P1]]) == s
+    return tk == s
+
+
+@jit
+def has_ticks(terms, params):
+    """Whether a control law of the model runs at a flight-software period."""
+    for j in range(1, terms.shape[0]):
+        kind = terms[j, KIND]
+        if (kind == PD_CONTROL or kind == BDOT_CONTROL) and params[terms[j, P0] + _CTL_PERIOD] > 0.0:
+            return True
+    return False
+
+
+@jit
+def next_tick(s, terms, params):
+    """The first flight-software tick after ``s`` of the model's laws, in the step loops'
+    independent variable (the time, or the eccentric anomaly: :func:`orbit_at`); ``inf`` if
+    none. The step loops land on it as on a breakpoint."""
+    best = np.inf
+    kind0 = terms[0, KIND]
+    t = s
+    if kind0 == ORBIT_KEPLER_ANOMALY:
+        orb = params[terms[0, P0]:terms[0, P1]]
+        t = time_of_anomaly(s, math.sin(s), orb)
+    for j in range(1, terms.shape[0]):
+        kind = terms[j, KIND]
+        if kind != PD_CONTROL and kind != BDOT_CONTROL:
+            continue
+        p0 = terms[j, P0]
+        period = params[p0 + _CTL_PERIOD]
+        if period > 0.0:
+            tk = _grid_after(t, params[p0 + _CTL_PHASE], period)
+            sk = tk
+            if kind0 == ORBIT_KEPLER_ANOMALY:
+                sk = anomaly_of_time(tk, orb)
+                while sk <= s:  # (rounding of the map to the anomaly)
+                    tk = _grid_after(tk, params[p0 + _CTL_PHASE], period)
+                    sk = anomaly_of_time(tk, orb)
+            if sk < best:
+                best = sk
+    return best
+
+
+@jit
+def tick(s, y, inertia, terms, params, table, work, start):
+    """The flight software at ``s`` (the step loops' independent variable) on the state ``y``:
+    each law with a period evaluates itself on ``y`` and writes the command it holds until
+    its next tick into ``y[z0:z0 + nz]`` (the PD law's torque, or its wheels' motor torques
+    clipped to the motors' limits; B-dot's dipole). ``start``: the first call of a run, where
+    a law evaluates if its command is unset (NaN: a run that starts) or ``s`` is one of its
+    ticks (a run resumed there); else every law evaluates (the loop landed on a tick of one of
+    them, and the others' ticks are checked here)."""
+    t, _, r, xhat, v = orbit_at(s, terms, params, table, work)
+    q = (y[0], y[1], y[2], y[3])
+    w0 = wheel_row(terms)
+    w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
+    omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
+    for j in range(1, terms.shape[0]):
+        kind = terms[j, KIND]
+        if kind != PD_CONTROL and kind != BDOT_CONTROL:
+            continue
+        p0 = terms[j, P0]
+        period = params[p0 + _CTL_PERIOD]
+        if not period > 0.0:
+            continue
+        z0 = int(params[p0 + _CTL_Z0])
+        if not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params) and not (start and np.isnan(y[z0])):
+            continue
+        if kind == PD_CONTROL:
+            sun = (0.0, 0.0, 0.0)
+            if terms[j, R1] > terms[j, R0]:
+                s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+                sun = (s4[0], s4[1], s4[2])
+            tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
+            if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
+                ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + int(params[p0 + _CTL_NZ])])
+            else:
+                y[z0] = tau[0]
+                y[z0 + 1] = tau[1]
+                y[z0 + 2] = tau[2]
+        else:
+            b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
+            m, _ = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
+            y[z0] = m[0]
+            y[z0 + 1] = m[1]
+            y[z0 + 2] = m[2]

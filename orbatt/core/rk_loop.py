@@ -40,7 +40,7 @@ import numpy as np
 
 from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, INTERPRETED,
                    borrow, borrow_model, jit, jit_inline, keepalive)
-from .gyrostat import rhs_extended, rhs_extended_lanes
+from .gyrostat import has_ticks, next_tick, rhs_extended, rhs_extended_lanes, tick
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
 from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
@@ -201,7 +201,19 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             facold = 1.0e-4
         flags = cnt[CNT_FLAGS] & FLAG_BITS
         status = DONE
+        # --- the flight software's ticks (orbatt.core.gyrostat.tick): a law with a period holds
+        # its command in the state; the loop lands on its ticks and evaluates it there
+        ticks = False
+        if EXTENDED:
+            ticks = has_ticks(terms, params)
         if (flags & FLAG_F0_VALID) == 0:
+            if EXTENDED:
+                if ticks:  # the first call: the commands held from the start
+                    if LANES:
+                        for l in range(nl):
+                            tick(t, yg[:, l], I[:, l], terms, params, table, work, True)
+                    else:
+                        tick(t, y1, inertia, terms, params, table, work, True)
             if LANES:
                 if EXTENDED:
                     rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])
@@ -262,6 +274,10 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         cap = rec_t.shape[0]
         bad_lane = -1
         t_brk = next_breakpoint(t, terms, params, table)
+        t_tick = np.inf
+        if EXTENDED:
+            if ticks:
+                t_tick = next_tick(t, terms, params)
         # --- the switching functions (orbatt.core.switches): references armed at t, the switch
         # located by an earlier call that the next steps land on (t_sw, function k_sw)
         nsw = 0
@@ -285,7 +301,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 status = BUFFER_FULL
                 break
             status, hh, landing, t_next = begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out,
-                                                        hmin, flags, min(t_brk, t_sw))
+                                                        hmin, flags, min(min(t_brk, t_sw), t_tick))
             if status != DONE:
                 break
             sw_land = landing and t_next == t_sw  # this attempt ends on the located switch
@@ -408,6 +424,17 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     if sw_land:
                         t_sw = np.inf
                         k_sw = -1
+                if EXTENDED:
+                    if t == t_tick:  # a tick: the laws evaluate on the state, which holds their commands
+                        if LANES:
+                            for l in range(nl):
+                                tick(t, yg[:, l], I[:, l], terms, params, table, work, False)
+                            rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])
+                        else:
+                            tick(t, y1, inertia, terms, params, table, work, False)
+                            rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
+                        cnt[CNT_NFEV] += 1
+                        t_tick = next_tick(t, terms, params)
                 row = -1
                 if landing and t == t_out[i_out]:  # (else a breakpoint)
                     if not record_all:

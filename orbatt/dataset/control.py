@@ -14,6 +14,7 @@ from ..core import kernel_floats
 from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
+from ..model_assembly import command_size
 from ..laws import law_of
 from ..units import from_kernel
 from .content import Var
@@ -69,11 +70,17 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
     qs = q.reshape(members, -1, 4)
     Qs = Q.reshape(members, -1, 4)
     hs = (np.zeros(qs.shape[:2] + (0,)) if h is None else np.asarray(h, dtype=np.float64).reshape(members, -1, n))
+    z = getattr(trajectory, "command", None)  # the flight software's held commands (issue 32)
+    zs = (np.zeros(qs.shape[:2] + (0,)) if z is None else
+          np.asarray(z, dtype=np.float64).reshape(members, qs.shape[1], -1))
     I = np.broadcast_to(np.asarray(inertia, dtype=np.float64), (members, 3))
     model = kernel_spec(trajectory.potential, [body], control)
+    if command_size(model) != zs.shape[-1]:
+        raise ValueError(f"the trajectory holds {zs.shape[-1]} flight-software commands, its control law "
+                         f"{command_size(model)}: its `command` is missing or from another law")
     out = {k: [] for k in ("omega", "hvec", "tau", "m", "u")}
     for e in range(members):
-        Y = np.ascontiguousarray(np.concatenate([qs[e], Qs[e], hs[e]], axis=1))
+        Y = np.ascontiguousarray(np.concatenate([qs[e], Qs[e], hs[e], zs[e]], axis=1))
         res = kg.evaluate_extended(kernel_floats(t), Y, kernel_floats(I[e]), *model, kp.new_work())
         for k, v in zip(out, res):
             out[k].append(v)

@@ -10,6 +10,7 @@ import warnings
 import numpy as np
 
 from ..core import dop853 as kd
+from ..core import gyrostat as kg
 from ..core import kepler as kk
 from ..core import model as km
 from ..core import potentials as kp
@@ -44,6 +45,8 @@ class DOP853(Method):
     order = 8
     adaptive = True
     extended = True
+    #: runs the flight software's ticks (a control law with a period) as knots of its loop
+    ticks = True
     options = {"max_step": "largest step allowed (time unit of the body); default no limit",
                "independent_variable": "'auto' (default: the eccentric anomaly on a Keplerian orbit, else the "
                                        "time), 'eccentric-anomaly' or 'time'",
@@ -137,6 +140,13 @@ class DOP853(Method):
         self.t_k = np.ascontiguousarray(p.t_out[self.n0:])
         self.kernel = switches_off(self._independent_variable(p), self.switches)
         self._start_states(self.ST)
+        # the flight software's first tick (issue 32): the commands held from t0, in the initial
+        # state that the outputs at t0 show (the loop's first call finds them set)
+        self.y_start = p.y0
+        if (p.kernel.terms[0, km.FLAGS] & km.EXTENDED) and kg.has_ticks(self.kernel.terms, self.kernel.params):
+            for e in range(E):
+                kg.tick(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], True)
+            self.y_start = self.Y.copy()
         if p.step_ends:
             self.rec_t = np.empty(256)
             self.rec_y = np.empty((256, width))
@@ -177,7 +187,7 @@ class DOP853(Method):
         n = int(counters[0, kd.CNT_IOUT] if counters.shape[0] == 1 else counters[:, kd.CNT_IOUT].min())
         # the initial state n0 times, then the outputs (np.concatenate of a broadcast, written directly)
         Y = np.empty((p.members, self.n0 + n, p.y0.shape[1]))
-        Y[:, :self.n0] = p.y0[:, None, :]
+        Y[:, :self.n0] = self.y_start[:, None, :]
         Y[:, self.n0:] = self.out[:, :n]
         return p.t_out[:self.n0 + n], Y
 
@@ -192,7 +202,7 @@ class DOP853(Method):
             if n and counters[0, kd.CNT_IOUT] >= self.t_k.shape[0]:
                 rec[-1] = p.t_out[-1]
         t = np.concatenate([[p.t0], rec])
-        Y = np.concatenate([p.y0[:1, None, :], rec_y[None, :n]], axis=1)
+        Y = np.concatenate([self.y_start[:1, None, :], rec_y[None, :n]], axis=1)
         return t, Y
 
     def outputs(self):

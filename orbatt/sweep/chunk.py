@@ -25,9 +25,10 @@ from ..core import potentials as kp
 from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
+from ..laws import law_of
 from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
 from ..scenario.binary_schema import BinarySpec
-from ..units import to_output
+from ..units import from_kernel, to_output
 from ..scenario.sweep_schema import (INERTIA_PARAMETERS, ORBIT_PARAMETERS, RATE_PARAMETERS,
                                      sweep_units)
 from .sampling import nominal_rates
@@ -177,13 +178,16 @@ def propagate_group(sc, bodies, q0, Q0, potential):
             continue
         tr = t1
         q[e], Q[e] = t1.q[0], t1.Q[0]
-        if t1.wheel_momenta is not None:
+        x1 = t1.extended  # the wheels' momenta and the flight software's held commands
+        if x1 is not None:
             if W is None:
-                W = np.full((m, N, t1.wheel_momenta.shape[-1]), np.nan)
-            W[e] = t1.wheel_momenta[0]
+                W = np.full((m, N, x1.shape[-1]), np.nan)
+            W[e] = x1[0]
         add_stats(stats, t1.stats)
     if tr is not None:
-        tr = dataclasses.replace(tr, q=q, Q=Q, wheel_momenta=W)
+        nw = 0 if tr.wheel_momenta is None else tr.wheel_momenta.shape[-1]
+        tr = dataclasses.replace(tr, q=q, Q=Q, wheel_momenta=None if W is None or not nw else W[..., :nw],
+                                 command=None if W is None or W.shape[-1] == nw else W[..., nw:])
     return tr, q, Q, failed, stats
 
 
@@ -316,7 +320,8 @@ def compute_chunk(sc, spec, job, units):
             full = Trajectory(body=body0, potential=potential, t=sc.times, q=q, Q=Q,
                               inertia=inertia[idx], method=tr.method if tr is not None else sc.method,
                               settings=tr.settings if tr is not None else {}, stats=st, complete=True,
-                              wheel_momenta=None if tr is None else tr.wheel_momenta)
+                              wheel_momenta=None if tr is None else tr.wheel_momenta,
+                              command=None if tr is None else tr.command)
             with np.errstate(invalid="ignore"):
                 piece = to_dataset(full, scenario_text=sc.text, title=f"orbatt sweep: {sc.name}")
             piece = piece.assign_coords(case=("case", start + idx, piece["case"].attrs))
@@ -354,11 +359,11 @@ def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, 
     """The study outputs (:mod:`orbatt.sweep.study`) of the cases ``idx`` of one orbit group into
     ``res``, case by case (a failed case keeps NaN, and -1 for the saturation flags)."""
     control = getattr(potential, "control", None)
-    by_target = control is not None and control.law == "pd" and control.target in ("orbital", "inertial")
+    by_target = control is not None and law_of(control).holds_frame(control.settings())
     p = None
     if orbit is not None and ((by_target and control.target == "orbital") or spec.pointing_reference == "orbital"):
         p = orbit.orbital_quaternion(sc.times)
-    W = None if tr is None else tr.wheel_momenta
+    W = None if tr is None else tr.extended  # the wheels' momenta, then the held commands
 
     def pointing(t, qq):
         pp = None if p is None else (p if t is sc.times else orbit.orbital_quaternion(t))
@@ -475,10 +480,10 @@ def _study_variables(sc, spec, UN, res, coords):
                                               "a wheel reached max_speed or max_torque", flag_values=np.array(
                                                   [-1, 0, 1], dtype=np.int8), flag_meanings="failed free saturated")
     if "max_control_torque" in outs:
-        data["max_control_torque"] = cf_variable(("case",), res["max_control_torque"] * 1e6, "N m",
+        data["max_control_torque"] = cf_variable(("case",), from_kernel(res["max_control_torque"], "torque"), "N m",
                                                  "largest |torque| the control applied (output times)")
     if "max_dipole" in outs:
-        data["max_dipole"] = cf_variable(("case",), res["max_dipole"] * 1e6, "A m^2",
+        data["max_dipole"] = cf_variable(("case",), from_kernel(res["max_dipole"], "dipole"), "A m^2",
                                          "largest |B-dot dipole| (output times)")
     return data
 

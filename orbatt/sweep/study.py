@@ -22,6 +22,7 @@ from ..core import kernel_floats
 from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
+from ..units import from_kernel
 
 __all__ = ["STUDY_OUTPUTS", "crossing_time", "window_start", "study_series", "target_pointing_error",
            "study_outputs"]
@@ -109,6 +110,11 @@ def refine_crossing(sc, potential, body, t, k, q, Q, h, quantity, level):
     from astropy import units as u
 
     tf = np.linspace(float(t[k]), float(t[k + 1]), REFINE_POINTS)
+    period = getattr(getattr(potential, "control", None), "period", None)
+    if period is not None and float(t[k]) % period != 0.0:
+        # a flight software holds a command issued before t[k]: a run from t[k] would issue
+        # another (on a tick it issues the same one, and the fine run is the case's own)
+        return None
     try:
         b = body
         if body.wheels:  # the wheels at their speeds of output k (relative to the body)
@@ -121,11 +127,11 @@ def refine_crossing(sc, potential, body, t, k, q, Q, h, quantity, level):
                                             max_torque=None if wh.max_torque_n_m is None else wh.max_torque_n_m * u.N * u.m,
                                             max_speed=None if wh.max_speed_rad_s is None
                                             else wh.max_speed_rad_s * u.rad / u.s))
-            b = RigidBody(body.inertia_value * 1e6 * u.kg * u.m**2, wheels=wheels)
+            b = RigidBody(from_kernel(body.inertia_value, "inertia") * u.kg * u.m**2, wheels=wheels)
         tr = propagate(b, State(b, q[k], Q[k]), potential, tf, method=sc.method, **sc.settings)
     except (OrbattError, ValueError):
         return None
-    hf = None if tr.wheel_momenta is None else np.ascontiguousarray(tr.wheel_momenta)
+    hf = None if tr.extended is None else np.ascontiguousarray(tr.extended)
     omega = study_series(potential, b, b.inertia_value, tf, np.ascontiguousarray(tr.q), np.ascontiguousarray(tr.Q),
                          hf)[0]
     x = quantity(omega, np.ascontiguousarray(tr.q), tf)
@@ -246,7 +252,7 @@ def study_outputs(sc, spec, potential, body, inertia, q, Q, h, pointing):
             if wh.max_speed_rad_s is not None:
                 sat[k] |= top[k] >= wh.max_speed_rad_s * (1.0 - SATURATION_MARGIN)
             if wh.max_torque_n_m is not None and u.shape[1]:
-                sat[k] |= np.max(np.abs(u[:, k])) * 1e6 >= wh.max_torque_n_m * (1.0 - SATURATION_MARGIN)
+                sat[k] |= from_kernel(np.max(np.abs(u[:, k])), "torque") >= wh.max_torque_n_m * (1.0 - SATURATION_MARGIN)
         out["wheel_saturated"] = sat
     if "max_control_torque" in outs:
         out["max_control_torque"] = float(np.max(np.sqrt(tau[:, 0] * tau[:, 0] + tau[:, 1] * tau[:, 1]

@@ -52,7 +52,19 @@ def _case_text(name, text, w1, i2):
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_every_case_is_the_single_run_of_its_scenario(name):
-    text = _base(name)
+    _check_every_case(name, _base(name))
+
+
+@pytest.mark.parametrize("name,period", [("lvlh-hold-wheels", "0.5 s"), ("cubesat-bdot-detumble", "1 s")])
+def test_every_case_with_a_flight_software_is_its_single_run(name, period):
+    """A law with a period (issue 32): each case, ticks and held commands included, is the
+    single run of its scenario bit for bit, in any chunking."""
+    text = _base(name).replace("[control]\n", f'[control]\nperiod = "{period}"\n', 1)
+    assert "period" in text
+    _check_every_case(name, text)
+
+
+def _check_every_case(name, text):
     i2 = INERTIA2[name]
     table = (f'\n[sweep]\noutputs = ["final_state", "max_pointing_error"]\n[sweep.parameters]\n'
              f'omega1 = {{ values = ["{OMEGA1[0]}", "{OMEGA1[1]}"] }}\n'
