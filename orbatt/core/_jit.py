@@ -21,6 +21,7 @@ import numpy as np
 from numba.core import cgutils, types
 from numba.core.caching import FunctionCache
 from numba.core.runtime import rtsys
+from numba.core.serialize import dumps
 from numba.extending import intrinsic
 
 from ..fast_paths import ENABLED as _FAST_PATHS
@@ -206,12 +207,44 @@ class CacheWarning(RuntimeWarning):
     """An unreadable entry of numba's disk cache was removed and its kernel recompiled."""
 
 
+def variant_name(func) -> str | None:
+    """Give a closure ``func`` a qualified name of its own variant, ``<qualname>[<digest>]``
+    (the digest of its cells' contents, as numba's cache keys them), before it is compiled;
+    the new name, or None where ``func`` is no closure or its cells cannot be digested (it
+    keeps its name).
+
+    numba names a kernel's machine code by its qualified name, its argument types and a count
+    of the functions the process has compiled so far, and a caller's machine code holds a
+    copy of each callee's under that name (a weak symbol: a process binds it to the first code
+    it loaded under the name). The variants of one closure (the DOP853 and Verner, rigid and
+    extended loops of :func:`orbatt.core.rk_loop.loop_of`, the ensemble drivers of
+    :mod:`orbatt.core.dop853`) share a qualified name and their types, and two processes that
+    compile the same kernels in the same order (a cold parallel start: pytest's or Dask's
+    workers, the warm-up beside a run) give two variants the same count. A process that then
+    loaded both ran one's callers on the other's code, silently (seen: an ensemble of DOP853
+    runs integrated with the Verner loop, sweeps of wheel models failing every case). With a
+    name per variant, two codes never share a name; the variants also get index files of
+    their own in the cache."""
+    cells = func.__closure__
+    if not cells:
+        return None
+    try:
+        digest = hashlib.sha256(dumps(tuple(c.cell_contents for c in cells))).hexdigest()[:12]
+    except Exception:  # noqa: BLE001 - an empty cell, or contents numba cannot pickle either
+        return None
+    func.__qualname__ = f"{func.__qualname__}[{digest}]"
+    return func.__qualname__
+
+
 def _preset(**options):
     """An ``njit`` decorator with ``options`` whose dispatchers cache on disk through
-    :class:`_CheckedCache` (numba's own cache where its cache class is not the one checked)."""
+    :class:`_CheckedCache` (numba's own cache where its cache class is not the one checked);
+    closures are named by their variant first (:func:`variant_name`)."""
     decorate = nb.njit(cache=True, error_model="numpy", **options)
 
     def apply(func):
+        if not nb.config.DISABLE_JIT:
+            variant_name(func)
         dispatcher = decorate(func)
         if type(getattr(dispatcher, "_cache", None)) is FunctionCache:
             dispatcher._cache = _CheckedCache(dispatcher.py_func)
