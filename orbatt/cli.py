@@ -49,6 +49,7 @@ def _parser():
                                                  "as 'orbatt export' with its defaults)")
     r.add_argument("--method", help="override [integration] method")
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    r.add_argument("--yes", action="store_true", help="agree to a run the work estimate finds long (minutes)")
 
     s = sub.add_parser("sweep", help="run a sweep scenario ([sweep] table) on Dask; one Dataset with a case dimension")
     s.add_argument("scenario", help="scenario TOML file with a [sweep] table (or the name of a shipped one)")
@@ -66,6 +67,7 @@ def _parser():
                                                          "missing from OUTPUT.parts/")
     s.add_argument("--seed", type=int, help="override [sweep] seed")
     s.add_argument("--quiet", action="store_true", help="no progress or summary")
+    s.add_argument("--yes", action="store_true", help="agree to a nominal case the work estimate finds long")
 
     i = sub.add_parser("info", help="summarize a result file")
     i.add_argument("file")
@@ -113,7 +115,7 @@ def _run(args, cold):
     from .errors import IntegrationError
     from .scenario import load_scenario
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, yes=args.yes)
     out = _output_path(args, sc)
     stem = _plot_stem(args, sc)
     aem = _aem_path(args, sc, out)
@@ -269,7 +271,7 @@ def _cmd_sweep(args):
     from .scenario import load_scenario
     from .sweep import Sweep, run_sweep
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, yes=args.yes)
     out = _output_path(args, sc, zarr=True)
     sw = Sweep(sc, seed=args.seed)
 

@@ -26,12 +26,13 @@ from ..state import State
 from ..torques import EnvironmentTorques, facet, sample_margin
 from ..orbital import state_from_orbital
 from .torques_schema import torque_arguments
-from .work import torque_rates
+from .work import counted_work, torque_rates
 
 __all__ = ["build_kepler_orbit", "build_rebound_orbit", "build_tle_orbit", "environment_margin", "tle_period",
            "build_potential",
            "build_environment_torques", "build_control", "build_initial_state",
-           "build_output_times", "check_work", "run_to_content", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS"]
+           "build_output_times", "check_work", "run_to_content", "check_field_span", "estimate_steps", "MAX_OUTPUTS", "MAX_WORK_STEPS",
+           "LONG_WORK_STEPS", "STEP_SECONDS"]
 
 #: most output times a scenario may ask for: the Dataset holds about 360 bytes per output
 #: time and the run needs working copies of it (2e6 outputs: 0.7 GB; a day every 0.05 s)
@@ -40,6 +41,13 @@ MAX_OUTPUTS = 2_000_000
 #: (the default ``max_steps`` of :func:`orbatt.propagate`: a run needing more would stop
 #: there after many minutes)
 MAX_WORK_STEPS = DEFAULT_MAX_STEPS
+#: most work (steps) a run may need without consent (``orbatt run --yes``,
+#: ``load_scenario(..., yes=True)`` or ``[integration] max_steps``): at :data:`STEP_SECONDS` a
+#: step, ten seconds at the least; a PD law with wheels at 4 us a step, 40 s
+LONG_WORK_STEPS = 10_000_000
+#: the least time (s) a compiled step takes, for the estimate's time in words (a torque-free
+#: DOP853 step: ~0.5 us; the disturbed CubeSat or a PD law with wheels: 2-4 us)
+STEP_SECONDS = 1e-6
 #: most angle (rad) one step of any method covers, for :func:`check_work`'s lower estimate
 #: (DOP853 at rtol 1e-3 takes about 1 rad per step of a rotation; at 1e-12, 0.1 rad)
 MAX_ANGLE_PER_STEP = math.pi
@@ -246,59 +254,98 @@ def build_initial_state(ctx, spec, body, orbit):
         raise ctx.error("[initial]", str(exc)) from None
 
 
-def estimate_steps(t_end, period, state0=None, spec=None, step=None):
-    """:func:`check_work`'s lower estimate of the integration steps of one run (a float)."""
+def _work(t_end, period, state0, spec, step, outputs):
+    """``[(steps, key, what)]``: every term of :func:`check_work`'s estimate (the key that sets
+    it, a phrase saying what it is), and the rates of :func:`~orbatt.scenario.work.torque_rates`
+    (for the time scale in the message)."""
     if step is not None:
-        return t_end / step
-    orbit = 4 * math.pi * t_end / period if period else 0.0
-    torque = 0.0 if spec is None else sum(r for r, _, _ in torque_rates(spec)) * t_end
-    spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
-    return (spin + orbit + torque) / MAX_ANGLE_PER_STEP
+        terms = [(t_end / step, "[integration] step", f"a fixed step of {step:.6g}")]
+    else:
+        terms = []
+        if state0 is not None:
+            spin = float(np.linalg.norm(state0.omega)) * t_end
+            terms.append((spin / MAX_ANGLE_PER_STEP, "[initial]", f"the body turns {spin:.3g} rad"))
+        if period:
+            gm_given = spec is not None and spec.orbit is not None and spec.orbit.get("central_body") is None \
+                and spec.orbit.get("gm") is not None and spec.orbit["provider"] != "tle"
+            terms.append((4.0 * math.pi * t_end / period / MAX_ANGLE_PER_STEP, "[orbit] gm" if gm_given else "[orbit] a",
+                          f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times"))
+    rates = [] if spec is None else torque_rates(spec)
+    if step is None:
+        terms += [(r * t_end / MAX_ANGLE_PER_STEP, key, what) for r, key, what in rates]
+    terms += counted_work(spec, t_end, outputs)
+    return terms, rates
 
 
-def check_work(ctx, t_end, period, state0=None, spec=None, step=None):
-    """Refuse a run that cannot end in reasonable time, before it starts.
+def estimate_steps(t_end, period, state0=None, spec=None, step=None, outputs=0):
+    """:func:`check_work`'s lower estimate of the work of one run, in integration steps (a
+    float)."""
+    return sum(w for w, _, _ in _work(t_end, period, state0, spec, step, outputs)[0])
+
+
+def _computing_time(steps):
+    """A lower estimate of the time of ``steps`` (at :data:`STEP_SECONDS` each), in words."""
+    s = steps * STEP_SECONDS
+    return f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
+
+
+def check_work(ctx, t_end, period, state0=None, spec=None, step=None, *, outputs=0, consent=True,
+               max_steps=None):
+    """Refuse a run that cannot end in reasonable time, or a long one not agreed to, before it
+    starts.
 
     A lower estimate of the steps any method needs: the body turns by ``|omega0| t_end``
     (``omega0`` the initial body rate of ``state0``, if given) and the gravity-gradient
     potential, which depends on twice the orbital angle, by ``2 (2 pi) t_end / period``; the
-    torques and control laws of ``spec`` (if given) turn it at their own rates
+    torques, control laws and wheels of ``spec`` (if given) turn it at their own rates
     (:func:`orbatt.scenario.work.torque_rates`: ``sqrt(tau / I)``, ``sqrt(kp / I)``, ``kd /
-    I``, ...); no method covers more than :data:`MAX_ANGLE_PER_STEP` per step. A fixed
-    ``step`` (s) needs ``t_end / step`` steps. Above :data:`MAX_WORK_STEPS` the error names the
-    key that dominates (``[initial]`` rates, ``[orbit] a``, the torque's or the law's key,
-    ``[integration] step``) and ``t_end``.
+    I``, ``h / I``, ``sqrt(max_torque / I)``, ...); no method covers more than
+    :data:`MAX_ANGLE_PER_STEP` per step. A fixed ``step`` (s) needs ``t_end / step`` steps.
+    Counted beside them (:func:`orbatt.scenario.work.counted_work`): the control period's ticks,
+    the environment tables' pieces and samples, and the ``outputs`` output times.
+
+    Above ``max_steps`` (default :data:`MAX_WORK_STEPS`: the run would stop there) it is
+    refused; above :data:`LONG_WORK_STEPS` (a minute or more) too unless ``consent`` (``orbatt
+    run --yes``, ``load_scenario(..., yes=True)`` or ``[integration] max_steps`` in the file).
+    The error names the key whose term dominates (``[initial]`` rates, ``[orbit] a`` or ``gm``,
+    the torque's, the law's or the wheel's key, ``[control] period``, ``[integration] step``,
+    ``t_end`` or ``output_step``), the estimated steps and time.
     """
-    if step is not None and not t_end / step <= MAX_WORK_STEPS:
+    hard = MAX_WORK_STEPS if max_steps is None else max_steps
+    limit = hard if consent else min(hard, LONG_WORK_STEPS)
+    if step is not None and not t_end / step <= hard:
         raise ctx.error("[integration] step", f"{step:.6g} over t_end = {t_end:.6g} is {t_end / step:.3g} steps, more "
-                                              f"than {MAX_WORK_STEPS:.0e} (hours of computing); give a longer step or "
+                                              f"than {hard:.0e} (hours of computing); give a longer step or "
                                               "shorten t_end")
-    orbit = 4 * math.pi * t_end / period if period else 0.0
-    rates = [] if spec is None else torque_rates(spec)
-    torque = sum(r for r, _, _ in rates) * t_end
-    if _spin_bound(state0) * t_end + orbit + torque <= MAX_WORK_STEPS * MAX_ANGLE_PER_STEP * (1.0 - 1e-9):
+    if state0 is not None and step is None and _spin_bound(state0) * t_end / MAX_ANGLE_PER_STEP \
+            + estimate_steps(t_end, period, None, spec, None, outputs) <= limit * (1.0 - 1e-9):
         return  # far enough below the limit by an upper bound of the spin (no need of omega)
-    spin = 0.0 if state0 is None else float(np.linalg.norm(state0.omega)) * t_end
-    steps = (spin + orbit + torque) / MAX_ANGLE_PER_STEP
-    if steps <= MAX_WORK_STEPS:
+    terms, rates = _work(t_end, period, state0, spec, step, outputs)
+    steps = sum(w for w, _, _ in terms)
+    if steps <= limit:
         return
-    top = max(rates, default=(0.0, "", ""))
-    if top[0] * t_end >= max(spin, orbit) or not math.isfinite(steps):
-        rate, key, what = top
-        if math.isfinite(rate):
-            tiny = float(np.min(spec.inertia)) * 1e6 < TINY_INERTIA
-            where = "[body] inertia" if tiny else key
-            what = f"{what} ({key})" if tiny else what
-            raise ctx.error(where, f"{what} sets a time scale of {1.0 / rate:.3g} s: at least {steps:.3g} integration steps "
-                                   f"over t_end = {t_end:.6g} s, more than {MAX_WORK_STEPS:.0e} (hours of computing, "
-                                   "a stiff problem); give a physical value (or raise [body] inertia, shorten "
-                                   "[integration] t_end)")
-    where = "[initial]" if spin >= orbit else "[orbit] a"
-    what = (f"the body turns {spin:.3g} rad" if spin >= orbit
-            else f"the orbit (period {period:.3g}) goes round {t_end / period:.3g} times")
-    fix = "lower the rates (omega, Q)" if spin >= orbit else "raise a"
-    raise ctx.error(where, f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps, more than "
-                           f"{MAX_WORK_STEPS:.0e} (hours of computing); {fix} or shorten [integration] t_end")
+    work, key, what = max(terms, key=lambda term: term[0] if math.isfinite(term[0]) else math.inf)
+    rate = next((r for r, k, _ in rates if k == key), None)
+    if rate is not None:  # a time scale of a torque, a law or a wheel
+        tiny = float(np.min(spec.inertia)) * 1e6 < TINY_INERTIA
+        what = (f"{what} ({key})" if tiny else what) + f" sets a time scale of {1.0 / rate:.3g} s"
+        key = "[body] inertia" if tiny else key
+        fix = "give a physical value (or raise [body] inertia, shorten [integration] t_end)"
+    else:
+        fix = {"[initial]": "lower the rates (omega, Q) or shorten [integration] t_end",
+               "[orbit] a": "raise a or shorten [integration] t_end",
+               "[orbit] gm": "give a physical gm or shorten [integration] t_end",
+               "[control] period": "give a longer period or shorten [integration] t_end",
+               "[integration] output_step": "give a longer output_step or shorten t_end",
+               "[integration] step": "give a longer step or shorten t_end"}.get(key, "shorten [integration] t_end")
+    over = f"{what} over t_end = {t_end:.6g}: at least {steps:.3g} integration steps"
+    if steps > hard or not math.isfinite(steps):
+        where = "[integration] max_steps = " if max_steps is not None else ""
+        raise ctx.error(key, f"{over}, more than {where}{hard:.0e} (hours of computing, a stiff problem or a "
+                             f"meaningless magnitude); {fix}")
+    raise ctx.error(key, f"{over}, more than {LONG_WORK_STEPS:.0e}: about {_computing_time(steps)} or more of computing; "
+                         f"{fix}, or agree to a long run (orbatt run --yes, load_scenario(..., yes=True) or "
+                         "[integration] max_steps)")
 
 
 def _spin_bound(state0):

@@ -55,14 +55,14 @@ class Scenario:
         ``rtol``, ``atol``, ``step`` as given (step in the time unit).
     """
 
-    def __new__(cls, spec=None, path=None):
+    def __new__(cls, spec=None, path=None, yes=False):
         if isinstance(spec, BinarySpec):  # [orbit] provider = "coupled": scenario/binary_scenario.py
             from .binary_scenario import BinaryScenario  # (imported for binaries only)
 
             return BinaryScenario(spec, path=path)
         return super().__new__(cls)
 
-    def __init__(self, spec: Spec, path=None):
+    def __init__(self, spec: Spec, path=None, yes=False):
         self.spec = spec
         self.path = path
         self.name = spec.name
@@ -81,7 +81,10 @@ class Scenario:
             kepler = build_kepler_orbit(ctx, spec.orbit)
             period = kepler.period_value
         self.times, self.t_end = build_output_times(ctx, spec.integration, period)
-        check_work(ctx, self.t_end, period, spec=spec)  # the orbit and the torques, before anything is sampled
+        max_steps = spec.integration.get("max_steps")
+        #: check_work's consent to a long run: ``yes`` (orbatt run --yes) or [integration] max_steps
+        work = {"outputs": len(self.times), "consent": bool(yes) or max_steps is not None, "max_steps": max_steps}
+        check_work(ctx, self.t_end, period, spec=spec, **work)  # the orbit and the torques, before anything is sampled
         check_field_span(ctx, spec, float(self.times[-1]))
         if provider == "tle":
             self.orbit = build_tle_orbit(ctx, spec.orbit, float(self.times[-1]), environment_margin(spec))
@@ -91,14 +94,15 @@ class Scenario:
         self.potential = build_potential(spec, self.orbit, float(self.times[-1]))
         self.state0 = build_initial_state(ctx, spec, self.body, self.orbit)
         self.method = spec.integration["method"]
-        self.settings = {k: spec.integration[k] for k in ("rtol", "atol", "independent_variable")
+        self.settings = {k: spec.integration[k] for k in ("rtol", "atol", "independent_variable", "max_steps")
                          if k in spec.integration}
         if "step" in spec.integration:
             kind, value = spec.integration["step"]
             self.settings["step"] = value * period if kind == "orbits" else value
-        check_work(ctx, self.t_end, period, self.state0, spec, self.settings.get("step"))
-        #: check_work's lower estimate of the integration steps (a sweep multiplies it by its cases)
-        self.work_steps = estimate_steps(self.t_end, period, self.state0, spec, self.settings.get("step"))
+        check_work(ctx, self.t_end, period, self.state0, spec, self.settings.get("step"), **work)
+        #: check_work's lower estimate of the work in integration steps (a sweep multiplies it by its cases)
+        self.work_steps = estimate_steps(self.t_end, period, self.state0, spec, self.settings.get("step"),
+                                         work["outputs"])
 
     def run(self, method=None, progress=False, **overrides):
         """Propagate and return the result :class:`xarray.Dataset` (see :mod:`orbatt.dataset`).
@@ -164,13 +168,17 @@ def shipped_scenarios():
 _PATH = type(Path())
 
 
-def load_scenario(path) -> Scenario:
+def load_scenario(path, yes=False) -> Scenario:
     """Read and validate a scenario file; return a :class:`Scenario`.
 
     Parameters
     ----------
     path : str or Path
         A TOML file, or the name of a shipped scenario (``orbatt scenarios`` lists them).
+    yes : bool
+        Agree to a long run (the work estimate above
+        :data:`~orbatt.scenario.build.LONG_WORK_STEPS`; ``orbatt run --yes``), as
+        ``[integration] max_steps`` in the file does.
 
     Raises
     ------
@@ -183,13 +191,13 @@ def load_scenario(path) -> Scenario:
         f = shipped_file(str(p))
         if f is not None:
             key = f.name[:-5]
-            return Scenario(parse_scenario_text(read_scenario_text(f), key), path=key)
+            return Scenario(parse_scenario_text(read_scenario_text(f), key), path=key, yes=yes)
         why = not_a_file(p)
         if why != "does not exist":  # a folder, a FIFO ...: say what it is
             raise ScenarioError(f"{path}: {why}; give a path to a TOML scenario file")
         raise ScenarioError(f"{path}: no such scenario file; give a path to a TOML file or one of: "
                             f"{', '.join(sorted(name for name, _, _ in shipped_scenarios()))}")
-    return Scenario(parse_scenario_text(read_scenario_text(p), str(p)), path=p)
+    return Scenario(parse_scenario_text(read_scenario_text(p), str(p)), path=p, yes=yes)
 
 
 #: validated specs by ``(text, source)``, most recently used last (:func:`parse_scenario_text`)

@@ -65,7 +65,8 @@ from ..errors import InputError
 from ..epoch import parse_epoch
 from .key_docs import parse_key_docs
 from .ranges import RANGES
-from .fields import FieldContext, check_integers, parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
+from .fields import (FieldContext, check_integers, parse_choice, parse_int, parse_plain_vector, parse_quantity, parse_time,
+                     parse_vector)
 from .sweep_schema import SweepSpec, parse_sweep_table
 from .binary_schema import BinarySpec, is_binary, parse_binary
 from .control_schema import CONTROL_KEYS, parse_control
@@ -87,7 +88,7 @@ TABLES = {
     "potential": {"kind", "sign"},
     "orbit": {"provider", "central_body", "gm", "a", "e", "i", "raan", "argp", "true_anomaly",
               "mean_anomaly", "epoch", "perturbations", "integrator", "tle", "tle_file"},
-    "integration": {"method", "rtol", "atol", "step", "t_end", "output_step", "independent_variable"},
+    "integration": {"method", "rtol", "atol", "step", "t_end", "output_step", "independent_variable", "max_steps"},
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
     "torques": TORQUE_KEYS,  # validated by parse_torques (torques_schema.py)
     "environment": ENVIRONMENT_KEYS,
@@ -202,6 +203,9 @@ independent_variable  text       'auto'                          DOP853's variab
                                                                  on a Keplerian orbit, no Kepler solve per stage:
                                                                  ~2x faster; else the time), 'eccentric-anomaly'
                                                                  or 'time' (orbatt 0.1's numbers)
+max_steps    plain integer       1e8                             most step attempts; giving it agrees to a run the
+                                                                 work estimate finds long (above 1e7 steps; else
+                                                                 orbatt run --yes)
 
 [sweep]
 # described by orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS
@@ -515,6 +519,10 @@ def _parse_integration(ctx, g, dimless, orbit):
                             f"'eccentric-anomaly' needs a Keplerian orbit ([orbit] provider = 'kepler'); this "
                             f"scenario {has}; give independent_variable = 'auto'")
         out["independent_variable"] = iv
+    if "max_steps" in g:
+        v = g["max_steps"]  # an integer, or an integral float (1e9)
+        v = int(v) if isinstance(v, float) and v.is_integer() and 1 <= v < 1e12 else v
+        out["max_steps"] = parse_int(ctx, "[integration] max_steps", v, 1, 10**12)
     for k in ("t_end", "output_step"):
         if k not in g:
             raise ctx.error(f"[integration] {k}", "missing; give the span t_end and the output_step")

@@ -27,8 +27,9 @@ __all__ = ["Sweep", "load_sweep", "check_sweep_work", "si_description", "FORMAT"
 #: most integration steps a sweep may need by the lower estimate (cases times the nominal
 #: case's steps): about an hour of a few cores at the compiled kernels' speed
 MAX_SWEEP_WORK_STEPS = 1e9
-#: the least work counted per case (its setup and outputs cost as much as ~100 steps)
-MIN_CASE_STEPS = 100.0
+#: the least work counted per case (its setup and study outputs cost as much as ~1000 steps: a
+#: millisecond; 1e7 cases are hours)
+MIN_CASE_STEPS = 1000.0
 
 #: format tag of a sweep's fingerprint and parts manifest
 FORMAT = "orbatt-sweep-1"
