@@ -37,7 +37,7 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["SWITCH", "ENABLED", "PATHS", "active"]
+__all__ = ["SWITCH", "ENABLED", "PATHS", "report", "active"]
 
 #: the environment variable that turns every fast path off (``0``)
 SWITCH = "ORBATT_FAST_PATHS"
@@ -54,13 +54,24 @@ PATHS = {
 }
 
 
-def active() -> dict:
-    """``{name: bool}``: which fast paths this process may use (a library check that fails
-    later turns its path off then). Imports xarray (for ``xarray-direct``'s check)."""
-    from .core import fast_paths_in_use
-    from .dataset import assembly
+#: name -> a function of no argument: whether that path is in use now (:func:`report`)
+_IN_USE: dict = {}
 
+
+def report(name: str, in_use) -> None:
+    """Called by the module that owns the fast path ``name`` (a key of :data:`PATHS`) when it
+    is imported: ``in_use``, a function of no argument, tells :func:`active` whether the path
+    is in use now (its library check passed, and has not failed since). The owners import
+    this module, never the other way round."""
+    if name not in PATHS:
+        raise KeyError(f"{name!r} is not a fast path of orbatt.fast_paths.PATHS")
+    _IN_USE[name] = in_use
+
+
+def active() -> dict:
+    """``{name: bool}``: which fast paths this process uses (a library check that fails
+    later turns its path off then). A path whose module has not been imported yet (it has
+    neither been used nor failed yet) is :data:`ENABLED`; imports nothing."""
     rebound = sys.modules.get("orbatt.orbits.rebound")  # not imported: not used, nor failed, yet
-    return {**fast_paths_in_use(), "xarray-direct": bool(assembly.DIRECT), "accessor-hook": ENABLED,
-            "interpreted-first": ENABLED,
+    return {**{name: ENABLED for name in PATHS}, **{name: bool(in_use()) for name, in_use in _IN_USE.items()},
             "rebound-particles": ENABLED if rebound is None else rebound.raw_reads_in_use()}

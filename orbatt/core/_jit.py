@@ -24,6 +24,7 @@ from numba.core.runtime import rtsys
 from numba.core.serialize import dumps
 from numba.extending import intrinsic
 
+from .. import fast_paths
 from ..fast_paths import ENABLED as _FAST_PATHS
 
 try:
@@ -175,8 +176,13 @@ _DISCARDED: list = []
 def fast_paths_in_use() -> dict:
     """``{"numba-cache-loads": bool, "borrowed-arrays": bool}``: the compiled kernels' fast
     paths (:mod:`orbatt.fast_paths`) this process uses now (a cache load that found numba's
-    internals changed has turned its path off); re-exported by :mod:`orbatt.core`."""
+    internals changed has turned its path off); re-exported by :mod:`orbatt.core`, and what
+    this module reports to :func:`orbatt.fast_paths.active`."""
     return {"numba-cache-loads": bool(FAST_LOADS), "borrowed-arrays": bool(BORROWED)}
+
+
+fast_paths.report("numba-cache-loads", lambda: fast_paths_in_use()["numba-cache-loads"])
+fast_paths.report("borrowed-arrays", lambda: fast_paths_in_use()["borrowed-arrays"])
 
 
 def core_stamp() -> str:

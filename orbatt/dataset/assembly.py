@@ -25,6 +25,7 @@ import pandas as pd
 import xarray as xr
 from xarray.indexes import PandasIndex
 
+from .. import fast_paths
 from ..fast_paths import ENABLED as FAST_PATHS
 
 __all__ = ["variable", "assemble", "decode_time"]
@@ -308,3 +309,4 @@ def _construct_works():
 #: checked once against the public constructors at import
 DIRECT = FAST_PATHS and _direct_works()
 DIRECT = DIRECT and _construct_works()
+fast_paths.report("xarray-direct", lambda: bool(DIRECT))
