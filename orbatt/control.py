@@ -189,6 +189,14 @@ class PDControl:
         from the orbital frame such as a roll, default identity).
     target_axis : 3 floats, optional
         The unit body axis to point at the Sun (``target = "sun"``, required).
+    max_rate : Quantity (angular rate), optional
+        A rate-limited eigenaxis slew (Wie, Weiss & Arapostathis 1989): the rate the law asks
+        for, ``-(kp / kd) e``, is scaled down to ``|omega_c| <= max_rate`` (``max_torque``
+        then acts as the acceleration limit); needs ``kd > 0``. Default: none.
+    ki : Quantity (N m / s), optional
+        Integral gain: ``- ki s``, ``s`` the integral of the attitude error (conditional
+        integration stops an axis while its command is saturated and the error would drive it
+        further: anti-windup). Default: 0.
     period : Quantity (time), optional
         The flight software's period: the law is evaluated at the ticks ``t_k = k period`` (time
         since the epoch: the time axis of the run) on the state at ``t_k``, and its command (the
@@ -200,7 +208,7 @@ class PDControl:
     law = "pd"
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
-                 target_axis=None, period=None):
+                 target_axis=None, max_rate=None, ki=None, period=None):
         if target not in TARGETS:
             raise InputError(f"target: {target!r} is not one of {', '.join(map(repr, TARGETS))}")
         if actuator not in ACTUATORS:
@@ -210,6 +218,10 @@ class PDControl:
         self.kd = _value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
         self.max_torque = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
         self.period = _period(period)
+        self.max_rate = _value(max_rate, u.rad / u.s, "max_rate", positive=True, allow_none=True)
+        if self.max_rate is not None and not self.kd > 0:
+            raise InputError("max_rate: the rate-limited slew needs kd > 0 (the rate loop's gain)")
+        self.ki = _value(ki, u.N * u.m / u.s, "ki", nonnegative=True, allow_none=True)
         self.target_q = self.target_axis = None
         if target == "inertial" and target_q is None:
             raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
@@ -238,6 +250,8 @@ class PDControl:
         axes = np.array([w.axis for w in wheels]) if self.actuator == "wheels" else None
         params = kc.pd_params(TARGETS[self.target], U.to_kernel(self.kp, "torque"),
                               U.to_kernel(self.kd, "torque_time"), tmax, values, axes,
+                              max_rate=np.inf if self.max_rate is None else self.max_rate,
+                              ki=0.0 if self.ki is None else U.to_kernel(self.ki, "torque"),
                               **command_slots(self.period, wheels))
         return (km.PD_CONTROL, params, sun_table)
 
@@ -258,7 +272,8 @@ class PDControl:
         :func:`orbatt.laws.control_law` makes this law of again."""
         return {"law": self.law, "target": self.target, "kp": self.kp, "kd": self.kd, "max_torque": self.max_torque,
                 "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
-                "target_axis": None if self.target_axis is None else self.target_axis.tolist(), "period": self.period}
+                "target_axis": None if self.target_axis is None else self.target_axis.tolist(),
+                "max_rate": self.max_rate, "ki": self.ki, "period": self.period}
 
     @property
     def reads_orbit(self):
@@ -284,6 +299,10 @@ class PDControl:
              "max_torque_N_m": self.max_torque, "actuator": self.actuator}
         if self.period is not None:
             d["period_s"] = self.period
+        if self.max_rate is not None:
+            d["max_rate_rad_s"] = self.max_rate
+        if self.ki is not None:
+            d["ki_N_m_per_s"] = self.ki
         if self.target_q is not None:
             d["target_q"] = self.target_q.tolist()
         if self.target_axis is not None:

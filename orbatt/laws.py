@@ -191,7 +191,14 @@ PD = Law(
             "target attitude [w, x, y, z], body -> inertial; with target = 'orbital' (optional) the held attitude "
             "relative to the orbital frame", "vector", size=4),
      LawKey("target_axis", "plain, 3 values", "required for sun", "unit body axis to point at the Sun", "vector",
-            size=3)) + COMMON_KEYS,
+            size=3),
+     LawKey("max_rate", "angular rate", "none",
+            "rate limit of an eigenaxis slew (Wie, Weiss & Arapostathis 1989): the commanded rate -(kp/kd) e is "
+            "scaled to at most max_rate, max_torque acting as the acceleration limit; needs kd > 0",
+            unit="rad / s", range=(1e-9, 10.0), sign="positive"),
+     LawKey("ki", "torque / time (N m / s)", "0", "integral gain on the attitude error (PID), with anti-windup "
+            "(no integration on an axis while its command saturates)", unit="N m / s", range=(0.0, 1e6),
+            sign="nonnegative")) + COMMON_KEYS,
     fields=_pd_fields, holds_frame=lambda s: s.get("target") in ("orbital", "inertial"), time_scales=_pd_scales,
     reads_orbit=lambda s: s.get("target") != "inertial")
 

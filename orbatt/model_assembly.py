@@ -30,7 +30,7 @@ from .core import control as kc
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["KernelSpec", "assemble", "command_size", "control_of", "model_rows"]
+__all__ = ["KernelSpec", "assemble", "command_size", "controller_start", "control_of", "model_rows"]
 
 
 class KernelSpec(NamedTuple):
@@ -49,6 +49,24 @@ def command_size(model):
     terms, params, _ = model
     return sum(int(params[terms[j, km.P0] + kc.CTL_NZ]) for j in range(1, terms.shape[0])
                if int(terms[j, km.KIND]) in (km.PD_CONTROL, km.BDOT_CONTROL))
+
+
+def controller_start(model):
+    """The initial values of the controllers' state components (:func:`command_size` of them):
+    NaN for a held command not issued yet (the flight software's first tick issues it), 0 for
+    a PD law's integral of its error."""
+    terms, params, _ = model
+    out = []
+    for j in range(1, terms.shape[0]):
+        kind, p0 = int(terms[j, km.KIND]), int(terms[j, km.P0])
+        if kind not in (km.PD_CONTROL, km.BDOT_CONTROL):
+            continue
+        vals = np.full(int(params[p0 + kc.CTL_NZ]), np.nan)
+        if kind == km.PD_CONTROL and params[p0 + kc.PD.ki] > 0.0:
+            zi = int(params[p0 + kc.PD.zi]) - int(params[p0 + kc.CTL_Z0])
+            vals[zi:zi + 3] = 0.0
+        out.append(vals)
+    return np.concatenate(out) if out else np.empty(0)
 
 
 def model_rows(model):

@@ -31,7 +31,7 @@ import numpy as np
 
 from .core import INTERPRETED
 from .errors import InputError, IntegrationError
-from .model_assembly import command_size, control_of
+from .model_assembly import control_of, controller_start
 from .methods import METHODS, Method, methods, register
 from .methods.base import resolve_method
 from .methods.problem import (DEFAULT_MAX_STEPS, MIN_RTOL, Problem, bodies_of, check_extended, initial_states,
@@ -122,12 +122,14 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     control = control_of(potential, control)
     kernel = kernel_spec(potential, bodies, control)
     check_extended(cls, kernel)
-    nz = command_size(kernel)
-    if nz:  # the flight software's held commands: unset (NaN) until the first tick, at the start
+    z0 = controller_start(kernel)
+    nz = z0.size
+    if nz:  # the controllers' states: held commands unset (NaN) until the first tick, integrals 0
         if not getattr(cls, "ticks", False):
-            raise InputError(f"method: {cls.name!r} cannot run a control law with a flight-software period (its "
-                             "ticks are knots of the compiled step loop); use method = 'dop853' or 'vern98'")
-        y0 = np.ascontiguousarray(np.hstack([y0, np.full((y0.shape[0], nz), np.nan)]))
+            raise InputError(f"method: {cls.name!r} cannot run a control law with a flight-software period or an "
+                             "integral (their states are knots and components of the compiled step loop); use "
+                             "method = 'dop853' or 'vern98'")
+        y0 = np.ascontiguousarray(np.hstack([y0, np.broadcast_to(z0, (y0.shape[0], nz))]))
     t0, t_end, tv = time_span(t, t_span, bodies[0], potential)
     rtol, atol, stepv, max_steps = method_settings(cls, rtol, atol, step, max_steps, bodies[0])
     progress = progress_callback(progress)

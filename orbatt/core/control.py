@@ -60,7 +60,7 @@ FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1))
 #: the parameter layouts (module docstring): one wheel, the PD law, B-dot
 WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1))
 PD = Slots(*FLIGHT_SOFTWARE, ("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4),
-           tail="pinv")
+           ("max_rate", 1), ("ki", 1), ("zi", 1), tail="pinv")
 BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
 #: the flight-software slots, the same in every law's row
 CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ = PD.period, PD.phase, PD.z0, PD.nz
@@ -71,6 +71,7 @@ PD_HEADER = PD.size
 # the slot offsets as module constants: numba folds them into the kernels as literals
 _W_AXIS, _W_IW, _W_UMAX, _W_SMAX = WHEEL.axis, WHEEL.iw, WHEEL.u_max, WHEEL.speed_max
 _PD_TARGET, _PD_KP, _PD_KD, _PD_TMAX, _PD_C, _PD_PINV = PD.target, PD.kp, PD.kd, PD.max_torque, PD.c, PD.pinv
+_PD_MAXRATE, _PD_KI, _PD_ZI = PD.max_rate, PD.ki, PD.zi
 #: the slot of the PD law's actuator (``params[p0 + PD_ACTUATOR]``)
 PD_ACTUATOR = PD.actuator
 _BD_GAIN, _BD_MMAX = BDOT.gain, BDOT.max_dipole
@@ -98,24 +99,32 @@ def flight_software(period=0.0, phase=0.0, z0=8):
 
 
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None, period=0.0,
-              phase=0.0, z0=8):
+              phase=0.0, z0=8, max_rate=np.inf, ki=0.0):
     """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
     :data:`TARGET_ORBITAL`, :data:`TARGET_INERTIAL`, :data:`TARGET_SUN`; ``target_values``:
     the target quaternion (relative to the orbital frame for ``TARGET_ORBITAL``; default
     identity) or the body axis (padded to 4); ``wheel_axes (n, 3)``: actuate with
     these wheels (their axes must span the three dimensions), else an ideal torque;
     ``period, phase, z0``: :func:`flight_software` (the held command: the torque, 3, or the
-    wheels' motor torques, n)."""
+    wheels' motor torques, n); ``max_rate``: the rate limit of the eigenaxis slew (``inf``:
+    none; needs ``kd > 0``); ``ki``: the integral gain (0: none), whose integral of the
+    error (3) follows the held command in the state (``zi``)."""
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
     if target != TARGET_SUN and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
         raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
     fs = flight_software(period, phase, z0)
-    nz = 3 if wheel_axes is None else np.asarray(wheel_axes).reshape(-1, 3).shape[0]
+    if not (max_rate > 0.0) or (max_rate < np.inf and not kd > 0.0):
+        raise ValueError(f"max_rate: {max_rate!r} must be positive, with kd > 0")
+    if not (ki >= 0.0 and np.isfinite(ki)):
+        raise ValueError(f"ki: {ki!r} must be finite and >= 0")
+    ncmd = (3 if wheel_axes is None else np.asarray(wheel_axes).reshape(-1, 3).shape[0]) if fs["period"] > 0 else 0
+    nint = 3 if ki > 0.0 else 0
     head = dict(target=float(target), kp=kp, kd=kd, max_torque=max_torque,
                 actuator=ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, c=c,
-                nz=float(nz) if fs["period"] > 0 else 0.0, **fs)
+                nz=float(ncmd + nint), max_rate=float(max_rate), ki=float(ki),
+                zi=fs["z0"] + ncmd if nint else -1.0, **fs)
     if wheel_axes is None:
         return PD.pack(**head)
     A = np.asarray(wheel_axes, dtype=np.float64).reshape(-1, 3).T  # (3, n)
@@ -195,14 +204,11 @@ def pointing_error(s_b, b):
 
 
 @jit_inline
-def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
-    """The PD law's commanded torque (body axes, each axis clipped) for the attitude ``q`` and
-    body rate ``omega``; the orbit's ``r, xhat, v`` and the Sun's position ``sun_s`` (inertial)
-    serve the orbital and Sun targets."""
+def pd_error(q, params, p0, r, xhat, v, sun_s):
+    """``(e, omega_t)``: the PD law's attitude error ``sgn(q_e0) Im(q_e)`` and the target's rate
+    (body axes) for the attitude ``q``; the orbit's ``r, xhat, v`` and the Sun's position
+    ``sun_s`` (inertial) serve the orbital and Sun targets."""
     target = params[p0 + _PD_TARGET]
-    kp = params[p0 + _PD_KP]
-    kd = params[p0 + _PD_KD]
-    tmax = params[p0 + _PD_TMAX]
     c = p0 + _PD_C
     wt = (0.0, 0.0, 0.0)
     if target == TARGET_SUN:
@@ -221,9 +227,57 @@ def pd_torque(q, omega, params, p0, r, xhat, v, sun_s):
             qt = (params[c], params[c + 1], params[c + 2], params[c + 3])
         qe = qmul(qconj(qt), q)
     sg = 1.0 if qe[0] >= 0.0 else -1.0
-    return (clip(-kp * sg * qe[1] - kd * (omega[0] - wt[0]), tmax),
-            clip(-kp * sg * qe[2] - kd * (omega[1] - wt[1]), tmax),
-            clip(-kp * sg * qe[3] - kd * (omega[2] - wt[2]), tmax))
+    return (sg * qe[1], sg * qe[2], sg * qe[3]), wt
+
+
+@jit_inline
+def pd_torque(q, omega, params, p0, r, xhat, v, sun_s, y):
+    """``(tau, raw, e)``: the PD law's commanded torque (body axes, each axis clipped to
+    ``max_torque``), the same before the clip, and its attitude error (:func:`pd_error`), for
+    the attitude ``q`` and body rate ``omega``:
+
+    * ``tau = -kp e - kd (omega - omega_t)`` (quaternion feedback);
+    * with ``max_rate``: the rate-limited eigenaxis slew of Wie, Weiss & Arapostathis (1989),
+      ``tau = -kd (omega - omega_t - omega_c)``, ``omega_c = -(kp / kd) e`` scaled down to
+      ``|omega_c| <= max_rate`` (the same law where the limit is not reached);
+    * with ``ki``: ``- ki s``, ``s = y[zi:zi + 3]`` the integral of ``e`` (:func:`pd_integral_rate`).
+    """
+    kp = params[p0 + _PD_KP]
+    kd = params[p0 + _PD_KD]
+    tmax = params[p0 + _PD_TMAX]
+    e, wt = pd_error(q, params, p0, r, xhat, v, sun_s)
+    mr = params[p0 + _PD_MAXRATE]
+    if mr < np.inf:
+        g = kp / kd
+        c0, c1, c2 = -g * e[0], -g * e[1], -g * e[2]
+        n = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+        if n > mr:
+            f = mr / n
+            c0, c1, c2 = c0 * f, c1 * f, c2 * f
+        t0 = -kd * (omega[0] - wt[0] - c0)
+        t1 = -kd * (omega[1] - wt[1] - c1)
+        t2 = -kd * (omega[2] - wt[2] - c2)
+    else:
+        t0 = -kp * e[0] - kd * (omega[0] - wt[0])
+        t1 = -kp * e[1] - kd * (omega[1] - wt[1])
+        t2 = -kp * e[2] - kd * (omega[2] - wt[2])
+    ki = params[p0 + _PD_KI]
+    if ki > 0.0:
+        zi = int(params[p0 + _PD_ZI])
+        t0 -= ki * y[zi]
+        t1 -= ki * y[zi + 1]
+        t2 -= ki * y[zi + 2]
+    return (clip(t0, tmax), clip(t1, tmax), clip(t2, tmax)), (t0, t1, t2), e
+
+
+@jit_inline
+def windup_gate(raw, e, ki, tmax):
+    """The rate of the integral of one axis's error ``e`` under conditional integration (anti-
+    windup): ``e``, or 0 while the command ``raw`` is beyond ``tmax`` and ``e`` would drive it
+    further (``d raw = -ki e dt``)."""
+    if (raw > tmax and e < 0.0) or (raw < -tmax and e > 0.0):
+        return 0.0
+    return e
 
 
 @jit_inline

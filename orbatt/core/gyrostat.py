@@ -35,6 +35,7 @@ from .torques import gradient_of_torque
 _W_AXIS, _W_IW = ctl.WHEEL.axis, ctl.WHEEL.iw
 _PD_ACTUATOR = ctl.PD_ACTUATOR
 _CTL_PERIOD, _CTL_PHASE, _CTL_Z0, _CTL_NZ = ctl.CTL_PERIOD, ctl.CTL_PHASE, ctl.CTL_Z0, ctl.CTL_NZ
+_PD_KI, _PD_ZI, _PD_TMAX = ctl.PD.ki, ctl.PD.zi, ctl.PD.max_torque
 
 
 @jit_inline
@@ -90,7 +91,7 @@ def wheel_count(params, w0):
 
 
 @jit_inline
-def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, v):
+def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, v, dz):
     """``(tau_ext, tau_applied, m)``: the external control torque (ideal PD and B-dot, body
     axes), the torque the control applies to the body (external or the wheels' reaction),
     and the B-dot dipole, for the orbit's ``r, xhat, v`` at ``t`` (:func:`orbit_radial`);
@@ -98,7 +99,8 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
     flight-software period (``params[p0 + CTL_PERIOD] > 0``) applies the command it holds in
     ``y[z0:z0 + nz]`` (the torque, the motor torques or the dipole; :func:`tick` wrote it)
     instead of evaluating itself; the wheels' speed limits and the field ``B(t)`` act at every
-    instant."""
+    instant. A continuous PD law with an integral gain writes its integral's rate (d/dt, the
+    anti-windup gate applied) into ``dz[zi:zi + 3]``."""
     for k in range(u.shape[0]):
         u[k] = 0.0
     ext = (0.0, 0.0, 0.0)
@@ -126,7 +128,13 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
             if terms[j, R1] > terms[j, R0]:
                 s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
                 sun = (s4[0], s4[1], s4[2])
-            tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
+            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun, y)
+            ki = params[p0 + _PD_KI]
+            if ki > 0.0:
+                zi = int(params[p0 + _PD_ZI])
+                tmax = params[p0 + _PD_TMAX]
+                for k in range(3):
+                    dz[zi + k] = ctl.windup_gate(raw[k], e[k], ki, tmax)
             if wheels:
                 tb = ctl.wheel_torques(tau, omega, y, params, p0, w0, u)
                 app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
@@ -162,15 +170,15 @@ def extended_rates(t, dtds, r, xhat, v, y, inertia, terms, params, table, work, 
     Qd = qmul_pure(Q, a)
     _, G = terms_at(t, q, inertia, terms, params, table, work, r, xhat, v)
     nw = wheel_count(params, w0)
-    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:8 + nw], r, xhat, v)
+    for k in range(8 + nw, y.shape[0]):  # the controllers' states: held commands are constant
+        dy[k] = 0.0                      # between ticks (a continuous integral's rate follows)
+    ext, _, _ = control_torques(t, q, omega, y, terms, params, table, work, w0, dy[8:8 + nw], r, xhat, v, dy)
     Gc = gradient_of_torque(q, ext)
     for k in range(4):
         dy[k] = dtds * (0.25 * qd[k])
         dy[4 + k] = dtds * (0.25 * Qd[k] - G[k] - Gc[k])
-    for k in range(8, 8 + nw):  # the wheels' rates (control_torques wrote dh/dt)
+    for k in range(8, y.shape[0]):  # the wheels' and the controllers' rates (control_torques wrote d/dt)
         dy[k] *= dtds
-    for k in range(8 + nw, y.shape[0]):  # the held commands: constant between ticks
-        dy[k] = 0.0
 
 
 @jit
@@ -214,13 +222,14 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
     tau = np.empty((N, 3))
     m = np.empty((N, 3))
     u = np.zeros((N, nw))
+    scratch = np.empty(Y.shape[1])  # (the integrals' rates: not an output)
     for i in range(N):
         y = Y[i]
         q = (y[0], y[1], y[2], y[3])
         w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
         om, hv = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
         r, xhat, v = orbit_radial(t[i], terms, params, table, work)
-        _, app, mi = control_torques(t[i], q, om, y, terms, params, table, work, w0, u[i], r, xhat, v)
+        _, app, mi = control_torques(t[i], q, om, y, terms, params, table, work, w0, u[i], r, xhat, v, scratch)
         for k in range(3):
             omega[i, k] = om[k]
             h[i, k] = hv[k]
@@ -326,13 +335,19 @@ def tick(s, y, inertia, terms, params, table, work, start):
             if terms[j, R1] > terms[j, R0]:
                 s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
                 sun = (s4[0], s4[1], s4[2])
-            tau = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun)
+            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun, y)
             if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
-                ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + int(params[p0 + _CTL_NZ])])
+                ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + wheel_count(params, w0)])
             else:
                 y[z0] = tau[0]
                 y[z0 + 1] = tau[1]
                 y[z0 + 2] = tau[2]
+            ki = params[p0 + _PD_KI]
+            if ki > 0.0:  # the discrete integral: s_k+1 = s_k + period e_k (anti-windup gated)
+                zi = int(params[p0 + _PD_ZI])
+                tmax = params[p0 + _PD_TMAX]
+                for k in range(3):
+                    y[zi + k] += period * ctl.windup_gate(raw[k], e[k], ki, tmax)
         else:
             b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
             m, _ = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
