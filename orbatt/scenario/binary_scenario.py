@@ -13,7 +13,7 @@ from .. import quaternion as qt
 from .. import units as U
 from ..binary import BinarySystem, Impulse, binary_content, propagate_binary
 from ..binary.system import rtn_basis
-from ..errors import InputError
+from ..errors import InputError, ScenarioError
 from .binary_schema import BinarySpec
 from .build import MAX_ANGLE_PER_STEP, MAX_WORK_STEPS, build_output_times, run_to_content
 from .fields import FieldContext
@@ -66,6 +66,12 @@ class BinaryScenario:
             # frame = "orbital": q and omega relative to O; O turns at |r x v| / r^2 about o3 (its
             # turn about o1, from an out-of-plane acceleration, is left out of this definition)
             if init["frame"] == "orbital":
+                h = float(np.linalg.norm(np.cross(r, v)))
+                if not h > 1e-12 * float(np.linalg.norm(r)) * float(np.linalg.norm(v)):
+                    raise ctx.error("[initial] frame", "'orbital': the relative position and velocity are parallel "
+                                                       "(a radial orbit: no orbit normal, no orbital frame); give q "
+                                                       "and omega with frame = 'inertial', or a velocity with an "
+                                                       "along-track part")
                 p = _orbital_frame_quaternion(r, v)
                 n_orb = np.linalg.norm(np.cross(r, v)) / float(r @ r)  # the orbital frame's rate, about o3
                 omega = omega + qt.rotate_inv(q, np.array([0.0, 0.0, n_orb]))
@@ -74,6 +80,8 @@ class BinaryScenario:
                 omega = 0.5 * qt.mul(qt.conj(q), init["Q"])[1:] / spec.inertia
             kw = {} if prim is None else {"q_primary": prim["q"], "omega_primary": prim["omega"] * U.RATE}
             self.y0 = self.system.state(r * U.LENGTH, v * (U.LENGTH / U.TIME), q, omega * U.RATE, **kw)
+        except ScenarioError:
+            raise
         except InputError as exc:
             where = "[orbit] position" if "position" in o else "[orbit] a"
             raise ctx.error(where, str(exc).split(": ", 1)[-1]) from None
@@ -137,8 +145,9 @@ class BinaryScenario:
         return self.run_content(method, progress, **overrides).to_dataset()
 
     def run_content(self, method=None, progress=False, **overrides):
-        """:meth:`run`'s result as a :class:`~orbatt.dataset.content.Content` (``progress`` is
-        accepted for the command line's sake; a binary run reports none)."""
+        """:meth:`run`'s result as a :class:`~orbatt.dataset.content.Content`; ``progress`` as
+        for :func:`orbatt.propagate` (a KeyboardInterrupt also stops the run: the result then
+        holds what was computed, ``integration_complete = 0``)."""
         m = method or self.method
         kw = {} if m == "splitting" else {"rtol": 1e-10, "atol": 1e-12}
         kw.update(self.settings)
@@ -147,7 +156,8 @@ class BinaryScenario:
             kw.pop("step", None)
             kw.pop("composition", None)
         return run_to_content(self.path or self.name, m, lambda: propagate_binary(
-            self.system, self.y0, self.times, method=m, impulses=self.impulses, **kw), self._content)
+            self.system, self.y0, self.times, method=m, impulses=self.impulses, progress=progress, **kw),
+            self._content)
 
     def _content(self, traj):
         return binary_content(traj, scenario_text=self.text, title=f"orbatt: {self.name}")

@@ -73,7 +73,7 @@ def parse_binary_sweep(ctx, table, data, potential_kind="coupled"):
         raise ctx.error("[sweep] outputs", f"expected a non-empty list such as {list(BINARY_DEFAULT_OUTPUTS)}, "
                                            f"got {outs!r}")
     for o in outs:
-        if o not in BINARY_OUTPUTS:
+        if not isinstance(o, str) or o not in BINARY_OUTPUTS:
             raise ctx.error("[sweep] outputs", f"{o!r} is not an output of a binary sweep; give some of "
                                                f"{', '.join(map(repr, BINARY_OUTPUTS))}")
     if "conservation" in outs and potential_kind != "coupled":

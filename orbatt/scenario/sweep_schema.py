@@ -240,6 +240,7 @@ class SweepSpec:
     settling_angle: float | None = None  # rad: settling_time's threshold
     window: float | None = None          # s (or plain): pointing_error's window; None: the default
     min_apoapsis: float | None = None  # km: a draw whose apoapsis a (1 + e) is lower is invalid (the Earth's radius)
+    source: str | None = None  # the scenario file (or name) the table was read from: messages about draws name it
 
     @property
     def grid(self) -> dict:
@@ -494,7 +495,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
     radius = None if orbit is None or dimensionless or "a" not in orbit else BODY_RADII.get(orbit["central_body"])
     if radius is not None:  # a Keplerian or REBOUND orbit about the Earth: no orbit inside it
         _check_apoapsis(ctx, params, orbit, radius)
-    spec = SweepSpec(parameters=params, paths=paths, min_apoapsis=radius)
+    spec = SweepSpec(parameters=params, paths=paths, min_apoapsis=radius, source=ctx.source)
     n_random = sum(d.random for d in params.values())
     if "samples" in table:
         spec.samples = parse_int(ctx, "[sweep] samples", table["samples"], 1)
@@ -513,7 +514,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         if not isinstance(outs, list) or not outs:
             raise ctx.error("[sweep] outputs", f"expected a non-empty list such as {list(DEFAULT_OUTPUTS)}, got {outs!r}")
         for o in outs:
-            if o not in OUTPUTS:
+            if not isinstance(o, str) or o not in OUTPUTS:
                 raise ctx.error("[sweep] outputs", f"{o!r} is not one of {', '.join(map(repr, OUTPUTS))}")
         spec.outputs = tuple(o for o in OUTPUTS if o in outs)
         if "final_energy_error" in spec.outputs and not conservative:

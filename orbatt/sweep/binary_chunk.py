@@ -172,6 +172,8 @@ def compute_binary_chunk(sc, spec, job, units):
         except IntegrationError:
             failed[j] = True
             continue
+        if not int(ds.attrs.get("integration_complete", 1)):  # the run kept what it had at a Ctrl-C: the sweep stops
+            raise KeyboardInterrupt
         add_stats(stats, ds.attrs.get("integration_stats"))
         for name, (val, unit) in _case_outputs(case, ds, outs).items():
             if name in res:

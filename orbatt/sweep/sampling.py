@@ -152,7 +152,7 @@ def draw_samples(spec: SweepSpec, seed, nominal, unit_text, check=None):
 
 
 def _invalid_message(spec, values, bad, tri, case, nominal, unit_text, check=None):
-    where = "[sweep.parameters]"
+    where = f"{spec.source}: [sweep.parameters]" if getattr(spec, "source", None) else "[sweep.parameters]"
     reason = getattr(check, "messages", {}).get(case)
     if reason is not None:
         drew = ", ".join(f"{name} = {values[name][case]:.6g} {'' if unit_text[name] == '1' else unit_text[name]}".rstrip()
