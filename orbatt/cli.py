@@ -56,8 +56,9 @@ def _parser():
     s.add_argument("-o", "--output", help="output file: NetCDF, or Zarr if it ends with .zarr (default: NAME.nc in "
                                           "the current folder); chunks go to OUTPUT.parts/ as they finish")
     s.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler (tcp://host:port); "
-                                                          "default: a local cluster on 127.0.0.1; 'synchronous': no Dask")
-    s.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes (default: CPU count); "
+                                                          "default: chosen by the work (this process, or a local "
+                                                          "cluster when it pays); 'synchronous': no Dask")
+    s.add_argument("--workers", type=int, metavar="N", help="a local cluster of N worker processes; "
                                                             "with --scheduler: wait for N workers")
     s.add_argument("--worker-timeout", type=float, default=120.0, metavar="SECONDS",
                    help="with --scheduler and --workers: how long to wait for the workers (default 120)")
@@ -271,16 +272,15 @@ def _cmd_sweep(args):
     from .scenario import load_scenario
     from .sweep import Sweep, run_sweep
 
+    t0 = time.perf_counter()
     sc = load_scenario(args.scenario, yes=args.yes)
     out = _output_path(args, sc, zarr=True)
     sw = Sweep(sc, seed=args.seed)
+    sw.setup_seconds = time.perf_counter() - t0  # what each worker of a cluster would pay again
 
     def report(info):
-        if args.quiet:
-            return
-        rate = f", {info.cases_done / info.wall_time_s:.1f} cases/s" if info.wall_time_s > 0 else ""
-        print(f"\rorbatt sweep: {info.chunks_done}/{info.chunks_total} chunks, {info.cases_done}/{info.cases_total} "
-              f"cases, {info.wall_time_s:.1f} s{rate}   ", end="", file=sys.stderr, flush=True)
+        if not args.quiet:
+            print(f"\r{info.line()}   ", end="", file=sys.stderr, flush=True)  # cases, cases/s, ETA, where
 
     if not args.quiet and sw.seed_source == "default" and not args.resume:
         print(f"orbatt sweep: [sweep] gives no seed; drew seed = {sw.seed} (recorded in the output as sweep_seed)",

@@ -5,28 +5,43 @@ group is one ensemble call.
 A case's scenario is the nominal file with the swept leaves replaced (:func:`case_data`,
 :func:`case_text`); its single run is the definition of the case. Cases whose scenarios
 differ only in the initial state and the principal moments share the orbit, the environment
-tables and the control law: they form one group, whose model is built once by the single
-run's own :class:`~orbatt.scenario.Scenario` (of the group's first case) and whose members'
-bodies and initial states are built from each case's own scenario by the single run's
-builders (:func:`~orbatt.scenario.build.build_initial_state`). So every case equals the
-single run of its scenario, bit for bit.
+tables and the control law: they form one group (one ensemble call), whose members' bodies and
+initial states are built from each case's own scenario by the single run's builders
+(:func:`~orbatt.scenario.build.build_initial_state`).
+
+Cases on one orbit share its **environment** whatever else varies (gains, facets, wheels,
+dipoles; issue 35): the orbit (a TLE's SGP4 samples) and the field tables along it (density,
+Sun, magnetic field) are built once per process - the nominal scenario's when the case's orbit
+is the nominal one - and each group's potential (its terms, facets and control law, cheap) is
+built by the single run's own builder (:func:`~orbatt.scenario.build.build_potential`) on that
+orbit and reads those tables (:class:`Environment`). The orbit and the tables are functions of
+the ``[orbit]``, ``[integration]`` and ``[environment]`` tables alone (:func:`environment_key`),
+built by the same code from the same inputs as the case's single run builds them, so every case
+still equals the single run of its scenario, bit for bit.
 """
 from __future__ import annotations
 
 import re
+import threading
 import tomllib
 import warnings
+from collections import OrderedDict
 
 import numpy as np
 from astropy import units as u
 
 from .. import units as U
 from ..body import RigidBody
+from ..control import reaction_wheel
 from ..scenario import FieldContext, Scenario, parse
-from ..scenario.build import build_initial_state
+from ..scenario.build import build_initial_state, build_potential, environment_margin
 from ..scenario.paths import ALIAS_PATHS, substitute, toml_text
 
-__all__ = ["ALIAS_PATHS", "case_data", "case_text", "state_only", "path_groups"]
+__all__ = ["ALIAS_PATHS", "case_data", "case_text", "state_only", "path_groups", "Environment", "environment_key",
+           "environment_of", "clear_environments", "MAX_ENVIRONMENTS"]
+
+#: environments (orbits with their field tables) a process keeps, least recently used dropped
+MAX_ENVIRONMENTS = 4
 
 
 
@@ -74,6 +89,94 @@ def state_only(name):
     return path.startswith("initial.") or re.fullmatch(r"body\.inertia\[\d\]", path) is not None
 
 
+#: the tables of the environment (:data:`orbatt.scenario.schema` tables) that alone determine
+#: a case's orbit and the fields sampled along it (with the margin, :func:`environment_key`)
+ENVIRONMENT_TABLES = ("orbit", "integration", "environment")
+
+_ENVIRONMENTS: OrderedDict = OrderedDict()
+_LOCK = threading.Lock()
+
+
+class Environment:
+    """What every case on one orbit shares: the orbit provider, the output times and the
+    integration settings (functions of ``[orbit]`` and ``[integration]``) and the field tables
+    along the orbit (``tables``: :meth:`orbatt.EnvironmentTorques.field_table`'s, filled as the
+    first potential on this orbit samples them, then read by every other)."""
+
+    def __init__(self, sc):
+        self.orbit, self.times, self.t_end = sc.orbit, sc.times, sc.t_end
+        self.method, self.settings = sc.method, sc.settings
+        # the tables' dict of the scenario's own potential, shared (None: a potential without)
+        self.tables = getattr(sc.potential, "_field_tables", None)
+        self.builds = 0  #: potentials built on it (for tests and benchmarks)
+
+
+def environment_key(data, spec):
+    """The key of a case's environment: the TOML text of its ``[orbit]``, ``[integration]`` and
+    ``[environment]`` tables (``data``: the case's scenario, TOML data), whether it is normalized,
+    and how far around the run a TLE and the tables are sampled (:func:`~orbatt.scenario.build.
+    environment_margin`). Two cases with one key have the same orbit and the same tables."""
+    part = {k: data[k] for k in ENVIRONMENT_TABLES if k in data}
+    return toml_text(part), bool(spec.dimensionless), float(environment_margin(spec))
+
+
+def clear_environments():
+    """Forget every environment kept by this process (:func:`environment_of`)."""
+    with _LOCK:
+        _ENVIRONMENTS.clear()
+
+
+def environment_of(sc, key, build):
+    """The :class:`Environment` of ``key`` in this process: kept from an earlier chunk, the
+    nominal scenario ``sc``'s own when ``key`` is its key, else that of the scenario ``build()``
+    returns (the single run's :class:`~orbatt.scenario.Scenario` of the first case on this
+    orbit), then kept (at most :data:`MAX_ENVIRONMENTS`). Returns ``(environment, scenario)``,
+    the scenario when one was built (None otherwise)."""
+    with _LOCK:
+        env = _ENVIRONMENTS.get(key)
+        if env is not None:
+            _ENVIRONMENTS.move_to_end(key)
+            return env, None
+        built = None
+        if key == _nominal_key(sc):
+            env = Environment(sc)
+        else:
+            built = build()
+            env = Environment(built)
+        _ENVIRONMENTS[key] = env
+        while len(_ENVIRONMENTS) > MAX_ENVIRONMENTS:
+            _ENVIRONMENTS.popitem(last=False)
+        return env, built
+
+
+def _nominal_key(sc):
+    key = getattr(sc, "_sweep_environment_key", None)
+    if key is None:
+        data = {k: v for k, v in tomllib.loads(sc.text).items() if k != "sweep"}
+        key = environment_key(data, sc.spec)
+        sc._sweep_environment_key = key
+    return key
+
+
+class CaseModel:
+    """A group's model on a shared :class:`Environment`: what :func:`orbatt.sweep.chunk.
+    propagate_group` reads of a :class:`~orbatt.scenario.Scenario` (``times``, ``settings``,
+    ``method``, ``body``, ``orbit``, ``potential``), built as the single run of the case's
+    ``spec`` builds them, the orbit and the field tables taken from ``env``."""
+
+    def __init__(self, spec, env, path=None):
+        self.spec, self.path, self.name, self.text = spec, path, spec.name, spec.text
+        wheels = [reaction_wheel(w) for w in spec.control["wheels"]] if spec.control is not None else ()
+        self.body = RigidBody(spec.inertia if spec.dimensionless else u.Quantity(spec.inertia, U.INERTIA),
+                              wheels=wheels)
+        self.orbit, self.times, self.t_end = env.orbit, env.times, env.t_end
+        self.method, self.settings = env.method, env.settings
+        self.potential = build_potential(spec, env.orbit, float(env.times[-1]))
+        if env.tables is not None and hasattr(self.potential, "_field_tables"):
+            self.potential._field_tables = env.tables  # the fields along this orbit, sampled once
+        env.builds += 1
+
+
 def path_groups(sc, spec, values, n):
     """``[(scenario, idx, bodies, q0, Q0)]``: the ``n`` cases of a chunk (``values[name]`` of
     length ``n``) grouped by their model, in order of first appearance. ``scenario`` is the
@@ -97,9 +200,14 @@ def path_groups(sc, spec, values, n):
         specs = []
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the nominal scenario warned
+            data0 = None
             for k in idx:
-                specs.append(parse(toml_text(case_data(base, spec, values, int(k), dimless)), source))
-            scenario = Scenario(specs[0], path=sc.path)
+                data = case_data(base, spec, values, int(k), dimless)
+                data0 = data if data0 is None else data0
+                specs.append(parse(toml_text(data), source))
+            env, built = environment_of(sc, environment_key(data0, specs[0]),
+                                        lambda: Scenario(specs[0], path=sc.path))
+            scenario = built if built is not None else CaseModel(specs[0], env, sc.path)
         ctx = FieldContext(source)
         wheels = scenario.body.wheels
         bodies, q0, Q0 = [], [], []

@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import json
 import secrets
+import time
 import tomllib
 import warnings
 
@@ -254,4 +255,8 @@ def load_sweep(path, *, seed=None) -> Sweep:
         A malformed file or ``[sweep]`` table, a missing ``[sweep]``, or (with
         ``on_invalid = "error"``) a sample outside the physical limits, named.
     """
-    return Sweep(load_scenario(path), seed=seed)
+    t0 = time.perf_counter()
+    sc = load_scenario(path)
+    sweep = Sweep(sc, seed=seed)
+    sweep.setup_seconds = time.perf_counter() - t0  # what a fresh worker pays again (run_sweep's choice)
+    return sweep

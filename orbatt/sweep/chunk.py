@@ -60,17 +60,21 @@ def scenario_from_text(text, source):
         return Scenario(parse(text, source), path=source)
 
 
-def run_chunk(job):
+def run_chunk(job, on_cases=None, scenario=None):
     """Task function: compute one chunk from its payload (:meth:`orbatt.sweep.Sweep.job`);
-    the Dataset's ``sweep_chunk_seconds`` attribute holds the task's wall time."""
+    the Dataset's ``sweep_chunk_seconds`` attribute holds the task's wall time.
+    ``on_cases(k)``, if given, is called as each group of ``k`` cases is done (progress per
+    case in this process); ``scenario``: the nominal scenario of ``job["text"]`` when this
+    process has it (else built from the text, once per process)."""
     t0 = time.perf_counter()
     threads = job.get("numba_threads")
     if threads:
         import numba
 
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
-    sc = scenario_from_text(job["text"], job["source"])
-    ds = compute_chunk(sc, sc.spec.sweep, job, sweep_units(sc.spec.sweep, sc.spec.dimensionless))
+    sc = scenario if scenario is not None and scenario.text == job["text"] else \
+        scenario_from_text(job["text"], job["source"])
+    ds = compute_chunk(sc, sc.spec.sweep, job, sweep_units(sc.spec.sweep, sc.spec.dimensionless), on_cases)
     ds.attrs["sweep_chunk_seconds"] = time.perf_counter() - t0
     return ds
 
@@ -247,7 +251,7 @@ def conserved_energy(spec, potential, orbit, inertia, q, Q, t):
     return H
 
 
-def compute_chunk(sc, spec, job, units):
+def compute_chunk(sc, spec, job, units, on_cases=None):
     """Compute the cases of a task's payload ``job`` (:meth:`orbatt.sweep.Sweep.job`).
 
     Parameters
@@ -260,6 +264,9 @@ def compute_chunk(sc, spec, job, units):
         ``start``, ``stop``, ``values`` (the chunk's parameter values), ``axis``.
     units : dict
         CF unit string of every parameter (:func:`~orbatt.scenario.sweep_schema.parameter_units`).
+    on_cases : callable, optional
+        Called with the number of cases of each group as it is done (binary chunks: once, at
+        the end).
 
     Returns
     -------
@@ -268,7 +275,10 @@ def compute_chunk(sc, spec, job, units):
     """
 
     if isinstance(sc.spec, BinarySpec):  # a binary: each case its own coupled run (binary_chunk.py)
-        return compute_binary_chunk(sc, spec, job, units)
+        ds = compute_binary_chunk(sc, spec, job, units)
+        if on_cases is not None:
+            on_cases(job["stop"] - job["start"])
+        return ds
     start, stop = job["start"], job["stop"]
     n = stop - start
     values = job["values"]
@@ -330,6 +340,8 @@ def compute_chunk(sc, spec, job, units):
                     if name in piece:
                         piece[name] = piece[name].expand_dims(case=piece["case"].size).copy()
             pieces.append(piece)
+        if on_cases is not None:
+            on_cases(int(idx.size))
 
     return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
 

@@ -1,4 +1,4 @@
-"""Running a sweep: chunks on Dask (or in this process), parts written as they finish,
+"""Running a sweep: chunks in this process or on Dask (chosen by the work), parts written as they finish,
 the merge into one Dataset, and its global attributes (``docs/sweeps.md``: Storage and
 resumption, Execution)."""
 from __future__ import annotations
@@ -28,25 +28,72 @@ from .stats import add_stats
 from .parts import (chunk_ranges, done_parts, parse_part, parts_dir, read_manifest, read_parts, write_manifest,
                     write_part, write_reductions)
 
-__all__ = ["run_sweep", "ChunkInfo", "open_client", "sweep_global_attrs", "MAX_AUTO_CHUNK"]
+__all__ = ["run_sweep", "ChunkInfo", "open_client", "sweep_global_attrs", "choose_scheduler", "MAX_AUTO_CHUNK",
+           "PROBE_CASES", "CLUSTER_START_S", "TASK_SECONDS"]
 
 #: largest chunk chosen automatically (cases per task)
 MAX_AUTO_CHUNK = 1000
 
 
+#: cases computed in this process first when the scheduler is chosen by the work (``scheduler``
+#: None without ``workers``): their time per case decides (:func:`choose_scheduler`)
+PROBE_CASES = 4
+#: seconds a local cluster costs besides its tasks: its scheduler and worker processes started,
+#: their imports, and closing it; measured on the 2-core sandbox at a load of 6: 2.2 s start,
+#: 4.2 s imports, 2.2 s close
+CLUSTER_START_S = 8.0
+#: a task's work (s) when the chunk size is chosen from the measured time per case: progress
+#: every few seconds, each task's ~20-40 ms of Dask, netCDF and merge overhead ~1 %
+TASK_SECONDS = 3.0
+
+
 @dataclass
 class ChunkInfo:
-    """What a :func:`run_sweep` progress callback receives after each chunk."""
+    """What a :func:`run_sweep` progress callback receives: after each chunk, and in this
+    process after each group of cases (``partial``: within a chunk)."""
 
-    start: int             #: first case of the chunk
+    start: int             #: first case of the chunk (of the cases just done, when partial)
     stop: int              #: one past its last case
     chunks_done: int       #: chunks complete (this run and earlier ones)
     chunks_total: int
-    cases_done: int
+    cases_done: int        #: cases complete (this run and earlier ones)
     cases_total: int
     wall_time_s: float     #: since the start of this run
     path: Path | None = None   #: the part file written (None without an output)
     extra: dict = field(default_factory=dict)
+    cases_computed: int = 0    #: cases computed by this run
+    scheduler: str = ""        #: where the cases run: "in-process", "local cluster", an address
+    workers: int = 1           #: processes (threads) computing at once
+    partial: bool = False      #: reported within a chunk (in this process)
+
+    @property
+    def rate(self) -> float:
+        """Cases per second of this run (NaN before the first case)."""
+        return self.cases_computed / self.wall_time_s if self.cases_computed and self.wall_time_s > 0 else math.nan
+
+    @property
+    def eta_s(self) -> float:
+        """Seconds left at this run's rate (NaN before the first case)."""
+        r = self.rate
+        return (self.cases_total - self.cases_done) / r if r > 0 else math.nan
+
+    def line(self) -> str:
+        """The progress line ``orbatt sweep`` prints: cases done, cases/s, ETA, chunks and
+        where the cases run."""
+        r, eta = self.rate, self.eta_s
+        speed = f", {r:.3g} cases/s, ETA {_duration(eta)}" if r == r else ""
+        where = self.scheduler + (f", {self.workers} workers" if self.workers > 1 else "")
+        return (f"orbatt sweep: {self.cases_done}/{self.cases_total} cases{speed} ({self.chunks_done}/"
+                f"{self.chunks_total} chunks, {self.wall_time_s:.0f} s; {where})")
+
+
+def _duration(s):
+    if not s == s:
+        return "?"
+    s = int(round(s))
+    return f"{s // 3600} h {s % 3600 // 60:02d} min" if s >= 3600 else f"{s // 60} min {s % 60:02d} s" \
+        if s >= 60 else f"{s} s"
+
 
 def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=None, resume=False,
               progress=None, client=None, keep_parts=False, worker_timeout=120.0, notify=None):
@@ -61,23 +108,31 @@ def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=No
         to ``OUTPUT.parts/`` as they finish and merged at the end (``docs/sweeps.md``). Without
         it nothing is written and the chunks are gathered in memory.
     scheduler : str, optional
-        ``None`` (default): a local cluster of ``workers`` processes on 127.0.0.1, started
-        and stopped here; ``"tcp://host:port"``: a running dask.distributed scheduler;
-        ``"synchronous"``: no Dask, the chunks one after the other in this process.
+        ``None`` (default, also ``"auto"``): chosen by the work (:func:`choose_scheduler`):
+        the first :data:`PROBE_CASES` cases run in this process, and the rest stay here unless
+        a local cluster of one worker per core, its start included, would finish them sooner
+        (on 2 cores: a few tens of seconds of work or more, with cases that do not share one
+        model); with ``workers``, a local cluster of that many processes on 127.0.0.1, started
+        and stopped here (also ``"local"``); ``"tcp://host:port"``: a running dask.distributed
+        scheduler; ``"synchronous"``: no Dask, the chunks one after the other in this process.
+        The progress (:class:`ChunkInfo`) and the ``sweep_run`` record say which ran.
     workers : int, optional
-        Local cluster: its number of worker processes (default: the CPU count). With a
-        scheduler address: wait until that many workers are connected.
+        Local cluster: its number of worker processes (default: the CPU count); giving it asks
+        for the cluster. With a scheduler address: wait until that many workers are connected.
     chunk_size : int, optional
         Cases per task. Default: the ``[sweep] chunk_size``, else a multiple of four tasks
-        per worker, at most 1000 cases each. The results do not depend on it. Keep a task
-        above ~0.1 s of work: each costs ~20-40 ms of Dask, netCDF and merge overhead.
+        per worker, at most 1000 cases each (a cluster chosen by the work: about
+        :data:`TASK_SECONDS` of work per task, from the measured time per case). The results
+        do not depend on it. Keep a task above ~0.1 s of work: each costs ~20-40 ms of Dask,
+        netCDF and merge overhead.
     resume : bool
         Keep the complete parts of an interrupted run of the same sweep (same scenario text,
         seed and number of cases; the seed is read back when the file gives none) and
         compute only the missing cases. Without it, an existing ``OUTPUT.parts/`` is refused.
     progress : callable, optional
-        Called with a :class:`ChunkInfo` after every chunk (and once at the start, with the
-        chunks found on resume).
+        Called with a :class:`ChunkInfo` after every chunk, after every group of cases
+        computed in this process (``partial``), and once at the start with the chunks found on
+        resume; :meth:`ChunkInfo.line` is ``orbatt sweep``'s progress line.
     client : dask.distributed.Client, optional
         Use this client (its cluster is left running); overrides ``scheduler``/``workers``.
     keep_parts : bool
@@ -94,7 +149,7 @@ def run_sweep(sweep, output=None, *, scheduler=None, workers=None, chunk_size=No
         Dimension ``case`` (and ``time``, ``quat``, ``axis`` as the outputs need); the swept
         parameters as coordinates along ``case``; global attributes ``sweep_seed``,
         ``sweep_parameters``, ... and ``sweep_run`` (JSON: chunks computed and reused this
-        run, wall time, scheduler). Opened from ``output`` when one is given (lazily for
+        run, wall time, scheduler, and ``scheduler_choice``: "asked", or why it was chosen). Opened from ``output`` when one is given (lazily for
         netCDF; load it or close it when done).
 
     Raises
@@ -222,46 +277,90 @@ def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, p
     """Compute the missing chunks; ``(results, run)``: the chunk Datasets kept in memory
     (without ``parts``) and the ``sweep_run`` record."""
     n_cases = sweep.cases
+    covered = covered.copy()
+    auto = scheduler in (None, "auto") and workers is None and client is None and not covered.all()
     synchronous = (scheduler == "synchronous" and client is None) or covered.all()  # all on disk: only the merge
-    scheduler_name = "synchronous" if scheduler == "synchronous" and client is None else \
-        (scheduler or "local cluster") if client is None else \
-        str(getattr(client, "scheduler", None) and client.scheduler.address)
     t_start = time.perf_counter()
     own = None
     owned_client = False
-    n_workers = 1
-    if not synchronous:
-        if client is None:
-            client, own = open_client(scheduler, workers, **connect)
-            owned_client = True
-        n_workers = max(1, sum(client.nthreads().values()))  # worker threads: tasks that run at once
     results = []
-    state = {"compute_s": 0.0, "k_done": len(reused), "cases_done": int(covered.sum())}
-    try:
-        if chunk_size is None:  # a multiple of 4 tasks per worker, at most MAX_AUTO_CHUNK cases each
-            rounds = math.ceil(n_cases / (4 * n_workers * MAX_AUTO_CHUNK))
-            chunk_size = sweep.spec.chunk_size or max(1, math.ceil(n_cases / (4 * n_workers * rounds)))
-        todo = chunk_ranges(~covered, int(chunk_size))
-        info = dict(chunks_total=len(reused) + len(todo), cases_total=n_cases)
+    state = {"compute_s": 0.0, "k_done": len(reused), "cases_done": int(covered.sum()), "computed": 0,
+             "chunks_total": len(reused), "scheduler": "in-process", "workers": 1, "computed_chunks": 0}
+    choice = "asked"
+
+    def report(a, b, path=None, partial=False):
         if progress is not None:
-            progress(ChunkInfo(0, 0, len(reused), cases_done=state["cases_done"], wall_time_s=0.0, **info))
+            progress(ChunkInfo(a, b, state["k_done"], state["chunks_total"], cases_done=state["cases_done"],
+                               cases_total=n_cases, wall_time_s=time.perf_counter() - t_start, path=path,
+                               cases_computed=state["computed"], scheduler=state["scheduler"],
+                               workers=state["workers"], partial=partial))
 
-        def handle(a, b, ds):
-            state["compute_s"] += float(ds.attrs.pop("sweep_chunk_seconds", 0.0))
-            path = None
-            if parts is not None:
-                path = write_part(ds, parts, a, b, sweep.fingerprint)
-            else:
-                results.append(ds)
-            state["k_done"] += 1
+    def handle(a, b, ds, counted=False):
+        state["compute_s"] += float(ds.attrs.pop("sweep_chunk_seconds", 0.0))
+        path = None
+        if parts is not None:
+            path = write_part(ds, parts, a, b, sweep.fingerprint)
+        else:
+            results.append(ds)
+        state["k_done"] += 1
+        state["computed_chunks"] += 1
+        if not counted:
             state["cases_done"] += b - a
-            if progress is not None:
-                progress(ChunkInfo(a, b, state["k_done"], cases_done=state["cases_done"],
-                                   wall_time_s=time.perf_counter() - t_start, path=path, **info))
+            state["computed"] += b - a
+        report(a, b, path)
 
+    def here(a, b, marks=None):
+        """The chunk ``(a, b)`` in this process, reported case by case."""
+        pos = [a]
+
+        def on_cases(k):
+            state["cases_done"] += k
+            state["computed"] += k
+            if marks is not None:
+                marks.append((time.perf_counter(), k))
+            report(pos[0], pos[0] + k, partial=True)
+            pos[0] += k
+
+        handle(a, b, run_chunk(sweep.job(a, b), on_cases, sweep.scenario), counted=True)
+
+    try:
+        if auto:
+            marks = [(time.perf_counter(), 0)]
+            size = min(PROBE_CASES, int(chunk_size or sweep.spec.chunk_size or PROBE_CASES))
+            probe = chunk_ranges(~covered, size)[:1]
+            state["chunks_total"] += 1  # the probe; the others once the scheduler is chosen
+            report(0, 0)
+            for a, b in probe:
+                here(a, b, marks)
+                covered[a:b] = True
+            cluster, choice = choose_scheduler(marks, int((~covered).sum()), os.cpu_count() or 1,
+                                               getattr(sweep, "setup_seconds", 0.0))
+            synchronous = not cluster
+        if not synchronous:
+            if client is None:
+                client, own = open_client(None if auto else scheduler, workers, **connect)
+                owned_client = True
+            state["workers"] = max(1, sum(client.nthreads().values()))  # worker threads: tasks that run at once
+            if not owned_client:
+                state["scheduler"] = str(getattr(client, "scheduler", None) and client.scheduler.address)
+            else:
+                state["scheduler"] = "local cluster" if auto else (scheduler or "local cluster")
+        if chunk_size is None:
+            chunk_size = sweep.spec.chunk_size
+        if chunk_size is None:
+            n_left = int((~covered).sum())
+            w = state["workers"]
+            rounds = math.ceil(max(n_left, 1) / (4 * w * MAX_AUTO_CHUNK))
+            chunk_size = max(1, math.ceil(n_left / (4 * w * rounds)))  # a multiple of 4 tasks per worker
+            if auto and not synchronous:  # a few seconds of work per task (the measured time per case)
+                chunk_size = max(1, min(chunk_size, math.ceil(TASK_SECONDS / max(_per_case(marks), 1e-3))))
+        todo = chunk_ranges(~covered, int(chunk_size))
+        state["chunks_total"] = state["k_done"] + len(todo)
+        if not auto:
+            report(0, 0)
         if synchronous:
             for a, b in todo:
-                handle(a, b, run_chunk(sweep.job(a, b)))
+                here(a, b)
         elif todo:
             _run_on_dask(client, sweep, todo, parts, handle)
     except BaseException:
@@ -273,11 +372,48 @@ def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, p
             client.close()
             if own is not None:
                 own.close()
-    run = {"chunks": info["chunks_total"], "chunks_computed": len(todo), "chunks_reused": len(reused),
-           "cases_computed": int(sum(b - a for a, b in todo)), "chunk_size": int(chunk_size),
+    name = state["scheduler"] if state["scheduler"] != "in-process" else "synchronous"
+    run = {"chunks": state["chunks_total"], "chunks_computed": state["computed_chunks"], "chunks_reused": len(reused),
+           "cases_computed": state["computed"], "chunk_size": int(chunk_size),
            "wall_time_s": time.perf_counter() - t_start, "compute_time_s": state["compute_s"],
-           "scheduler": scheduler_name, "workers": int(n_workers)}
+           "scheduler": name, "workers": int(state["workers"]), "scheduler_choice": choice}
     return results, run
+
+
+def _per_case(marks):
+    """Seconds per case after the first group of the probe (the environment and the kernels
+    of this process are set up by then), else over the whole probe."""
+    if len(marks) > 2:
+        k = sum(m[1] for m in marks[2:])
+        return (marks[-1][0] - marks[1][0]) / k
+    k = sum(m[1] for m in marks[1:])
+    return (marks[-1][0] - marks[0][0]) / max(k, 1)
+
+
+def choose_scheduler(marks, left, cores, setup_s=0.0):
+    """``(cluster, why)``: whether the ``left`` cases of a sweep run on a local cluster of
+    ``cores`` workers rather than in this process, from the probe's ``marks`` (``[(time,
+    cases)]``: its start, then each group of cases as it was done).
+
+    In this process each case costs the measured time per case (:func:`_per_case`); a cluster
+    divides that by ``cores`` but first costs :data:`CLUSTER_START_S` plus, in every worker,
+    what the probe's first group cost beyond a case (the environment, loading the kernels) and
+    the nominal scenario's build (``setup_s``). Cases that share a model run as one ensemble
+    here, on every core already: they stay in this process."""
+    per_case = _per_case(marks)
+    here = per_case * left
+    first = marks[1][0] - marks[0][0] - per_case * marks[1][1] if len(marks) > 1 else 0.0
+    probe_cases = sum(m[1] for m in marks[1:])
+    if cores < 2:
+        return False, f"auto: in-process (1 core; {per_case:.3g} s per case)"
+    if len(marks) - 1 < probe_cases:
+        return False, f"auto: in-process (the cases share models: ensembles on every core; {per_case:.3g} s per case)"
+    cluster = CLUSTER_START_S + max(first, 0.0) + setup_s + here / cores
+    if cluster < here:
+        return True, (f"auto: local cluster ({left} cases of {per_case:.3g} s: ~{here:.0f} s here, ~{cluster:.0f} s "
+                      f"on {cores} workers)")
+    return False, (f"auto: in-process ({left} cases of {per_case:.3g} s: ~{here:.0f} s here, ~{cluster:.0f} s on a "
+                   f"{cores}-worker cluster)")
 
 
 def _run_on_dask(client, sweep, todo, parts, handle):

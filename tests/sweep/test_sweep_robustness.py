@@ -97,11 +97,11 @@ def test_a_failure_after_a_part_keeps_the_parts(tmp_path, monkeypatch):
 
     real, calls = R.run_chunk, []
 
-    def second_fails(job):
+    def second_fails(job, *args, **kwargs):
         calls.append(job["start"])
         if len(calls) == 2:
             raise KeyboardInterrupt
-        return real(job)
+        return real(job, *args, **kwargs)
 
     monkeypatch.setattr(R, "run_chunk", second_fails)
     with pytest.raises(KeyboardInterrupt):
