@@ -102,6 +102,18 @@ def aem_direction_cosine_matrix(Q):
     return M.reshape(Q.shape[:-1] + (3, 3))
 
 
+def _check_text(name, value):
+    """Refuse a metadata value that would break the message's lines: a control character (a
+    newline would start a second ``KEY = value`` line, even a second ``META_STOP``)."""
+    if value is None:
+        return
+    text = str(value)
+    bad = next((ch for ch in text if ord(ch) < 32 or 127 <= ord(ch) < 160 or ch in "\u2028\u2029"), None)
+    if bad is not None:
+        raise InputError(f"{name}: {text!r} holds the control character {bad!r}; an AEM value is one line of "
+                         "printable text")
+
+
 def _kvn(key, value):
     return f"{key:<{_PAD}} = {value}"
 
@@ -177,9 +189,17 @@ def write_aem(ds, path=None, *, attitude="q", case=None, object_name="SATELLITE"
         raise InputError(f"attitude: the dataset has no {attitude!r} (q_orbital needs an orbit)")
     if ref_frame_a is None:
         ref_frame_a = "EME2000" if attitude == "q" else "RTN"
+    for name, value in (("object_name", object_name), ("object_id", object_id), ("center_name", center_name),
+                        ("ref_frame_a", ref_frame_a), ("ref_frame_b", ref_frame_b), ("originator", originator),
+                        *((f"comments[{k}]", c) for k, c in enumerate(comments))):
+        _check_text(name, value)
     if "case" in ds[attitude].dims:
         if case is None:
             raise InputError("case: this is an ensemble; choose the member to write with case=...")
+        cases = ds["case"].values
+        if isinstance(case, bool) or not isinstance(case, (int, np.integer)) or case not in cases:
+            span = f"{cases[0]} .. {cases[-1]}" if cases.size else "none"
+            raise InputError(f"case: {case!r} is not a case of this ensemble (cases {span}); give one of them")
         ds = ds.sel(case=case)
     elif case is not None:
         raise InputError("case: this dataset is not an ensemble; leave case out")

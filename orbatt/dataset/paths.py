@@ -16,6 +16,11 @@ from .netcdf import check_replaceable, is_orbatt_result
 __all__ = ["file_name", "is_orbatt_result", "check_output_path", "check_replaceable"]
 
 _NAME_MAX = 255  # bytes in one file name (Linux, macOS, Windows)
+#: what a temporary name (``.tmp-<name>.<pid>.<8 hex>``, :func:`orbatt.dataset.atomic.temp_path`)
+#: adds to a file's name, at most (a pid of 10 digits)
+_DECORATION = len(".tmp-") + 1 + 10 + 1 + 8
+#: the longest output file name: its temporary must fit too
+_NAME_ROOM = _NAME_MAX - _DECORATION
 
 
 def file_name(name, suffix="", *, what="name"):
@@ -54,10 +59,32 @@ def file_name(name, suffix="", *, what="name"):
         raise InputError(f"{what}: {name!r} starts with '.'; output files are named after it: give a plain name "
                          "such as 'my-run'")
     out = name + suffix
-    if len(os.fsencode(out)) > _NAME_MAX:
+    if len(os.fsencode(out)) > _NAME_ROOM:
         raise InputError(f"{what}: {name[:40]!r}... is too long for a file name ({len(os.fsencode(out))} bytes "
-                         f"with {suffix!r}, at most {_NAME_MAX}); give a shorter name")
+                         f"with {suffix!r}, at most {_NAME_ROOM}: the file is written through a temporary "
+                         f"name {_DECORATION} bytes longer, at most {_NAME_MAX}); give a shorter name")
     return out
+
+
+def _check_length(p, what, s, extra=""):
+    """Refuse ``p`` when its name, or that of its temporary (:func:`orbatt.dataset.atomic.temp_path`)
+    or of ``extra`` appended (a sweep's ``OUTPUT.parts``), is longer than the folder's file
+    system takes, or the whole path longer than its paths."""
+    folder = p.parent
+    try:
+        name_max = os.pathconf(folder, "PC_NAME_MAX")
+        path_max = os.pathconf(folder, "PC_PATH_MAX")
+    except (OSError, ValueError, AttributeError):
+        name_max, path_max = _NAME_MAX, 4096
+    n = len(os.fsencode(p.name + extra)) + _DECORATION
+    if n > name_max:
+        raise InputError(f"{what}: the file name {p.name[:40]!r}... is too long ({n - _DECORATION} bytes"
+                         f"{' with ' + repr(extra) if extra else ''}; its temporary takes {_DECORATION} more, "
+                         f"at most {name_max} here); give a shorter name")
+    full = len(os.fsencode(os.path.abspath(s))) + len(os.fsencode(extra)) + _DECORATION
+    if full >= path_max:
+        raise InputError(f"{what}: {s[:40]!r}... is too long a path ({full - _DECORATION} bytes, at most "
+                         f"{path_max - 1 - _DECORATION} here); give a shorter one")
 
 
 def check_output_path(path, *, what="-o", zarr=False, ours=None):
@@ -104,6 +131,7 @@ def check_output_path(path, *, what="-o", zarr=False, ours=None):
     if not folder.is_dir():
         state = "is not a folder" if folder.exists() else "does not exist"
         raise InputError(f"{what}: the folder {str(folder)!r} of {s!r} {state}; create it or give another path")
+    _check_length(p, what, s, ".parts" if zarr else "")
     probe = folder / f"{TEMP_PREFIX}probe.{os.getpid()}.{secrets.token_hex(4)}"
     try:
         os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))

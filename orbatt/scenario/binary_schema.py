@@ -39,8 +39,11 @@ from ..body import check_triangle
 from ..errors import InputError
 from .binary_sweep_schema import parse_binary_sweep
 from .fields import parse_choice, parse_plain_vector, parse_quantity, parse_time, parse_vector
+from .key_docs import parse_key_docs
+from .ranges import Range
 
-__all__ = ["BinarySpec", "is_binary", "parse_binary", "BINARY_TABLES", "BINARY_METHODS", "BINARY_POTENTIALS"]
+__all__ = ["BinarySpec", "is_binary", "parse_binary", "BINARY_TABLES", "IMPULSE_KEYS", "BINARY_KEY_DOCS",
+           "BINARY_RANGES", "BINARY_METHODS", "BINARY_POTENTIALS"]
 
 BINARY_TABLES = {
     "body": {"mass", "inertia"},
@@ -51,7 +54,91 @@ BINARY_TABLES = {
     "primary": {"inertia", "q", "omega"},
     "integration": {"method", "rtol", "atol", "t_end", "output_step", "step", "composition"},
 }
+#: the keys of each ``[[orbit.impulses]]`` table
+IMPULSE_KEYS = ("time", "delta_v")
 BINARY_METHODS = ("dop853", "vern98", "splitting")
+#: what each key of :data:`BINARY_TABLES` (and of ``[[orbit.impulses]]``) is: ``(dimension,
+#: default, meaning)`` by table, as :data:`orbatt.scenario.schema.KEY_DOCS` for a single body;
+#: ``docs/scenarios.md`` shows them (:mod:`orbatt.scenario.reference`; a test keeps every key
+#: described)
+BINARY_KEY_DOCS = parse_key_docs("""
+[body]
+mass     mass                       required  the secondary's mass M2 (the body whose attitude is always integrated)
+inertia  mass x length^2, 3 values  required  the secondary's principal moments [I1, I2, I3] (triangle inequality)
+
+[initial]
+q      plain, 4 values         required    the secondary's attitude quaternion (scalar first), body -> `frame`
+Q      momentum, 4 values      -           conjugate momentum Q = 2 q (0, I omega), instead of omega (frame =
+                                           'inertial' only)
+omega  angular rate, 3 values  required    the secondary's body rates (relative to the orbital frame when frame =
+                                           'orbital'); or Q
+frame  'inertial' | 'orbital'  'inertial'  the frame q and omega are relative to: 'orbital' is that of the
+                                           relative orbit (radial, along-track, normal; refused for a radial
+                                           orbit, r parallel to v)
+
+[potential]
+kind  'coupled' | 'gravity-gradient'  'coupled'  'coupled': the mutual potential to second order acts on the orbit
+                                                 and both bodies; 'gravity-gradient': the orbit feels the point masses
+                                                 only, the secondary the torque of eq. 20, the primary none
+
+[orbit]
+provider      'coupled'               required            the relative orbit (primary -> secondary) integrated with
+                                                          the attitudes: a binary asteroid
+primary_mass  mass                    required            the primary's mass M1
+a             length                  one of the two      osculating semi-major axis about G (M1 + M2)
+e             plain                   with a              osculating eccentricity, 0 <= e < 1
+i             angle                   with a              inclination to the inertial s1-s2 plane (the primary's
+                                                          axes at q = identity)
+raan          angle                   with a              right ascension of the ascending node
+argp          angle                   with a              argument of periapsis
+true_anomaly  angle                   with a              true anomaly at t = 0
+position      length, 3 values        one of the two      relative position, inertial (instead of the elements)
+velocity      speed, 3 values         with position       relative velocity, inertial
+impulses      array of tables         none                [[orbit.impulses]]: velocity changes of the secondary
+                                                          (keys below)
+
+[orbit.impulses]
+time     time                    required  when (> 0, at most the last output; on the step grid for the
+                                           splitting); impulses at one time are applied in the order written
+delta_v  speed, 3 values         required  the secondary's velocity change relative to the primary: radial,
+                                           along-track, normal (the orbital frame at that time)
+
+[primary]
+inertia  mass x length^2, 3 values  required (with [primary])  the primary's principal moments; without [primary]
+                                                               the primary is a point mass
+q        plain, 4 values            identity                   the primary's attitude, body -> inertial
+omega    angular rate, 3 values     zero                       the primary's body rates
+
+[integration]
+method       'dop853' | 'vern98' | 'splitting'  'dop853'               the adaptive loops, or the symplectic splitting
+                                                                       (fixed step)
+rtol         plain                              1e-10 (adaptive)       relative tolerance (dop853, vern98)
+atol         plain                              1e-12 (adaptive)       absolute tolerance (dop853, vern98)
+step         time or 'N orbits'                 required by splitting  the splitting's fixed step; divides
+                                                                       output_step and the impulse times
+composition  text                               'yoshida4'             the splitting's composition: 'strang',
+                                                                       'yoshida4', 'suzuki4', 'mclachlan4',
+                                                                       'yoshida6', 'kahanli6'
+t_end        time or 'N orbits'                 required               the span ('N orbits': the initial
+                                                                       osculating period)
+output_step  time or 'N orbits'                 required               spacing of the output times
+""")
+#: the physical range of each numeric key (:class:`orbatt.scenario.ranges.Range`, by table as
+#: in :data:`BINARY_KEY_DOCS`; angles: :data:`orbatt.scenario.ranges.ANGLE_LIMIT`)
+BINARY_RANGES = {
+    # an impulse's components: up to 100 times the Earth-Moon orbital speed (an asteroid's
+    # kinetic impact gives mm/s); the speed of light is no impulse
+    ("orbit.impulses", "delta_v"): Range(None, 100.0, "km / s", signed=True),
+    ("body", "inertia"): Range(1e-14, 1e51, "kg m2"),
+    ("primary", "inertia"): Range(1e-14, 1e51, "kg m2"),
+    ("initial", "omega"): Range(None, 1e4, "rad / s", signed=True),
+    ("primary", "omega"): Range(None, 1e4, "rad / s", signed=True),
+}
+
+
+def _bounds(table, key, unit):
+    """``(low, high)`` of ``[table] key`` (:data:`BINARY_RANGES`) in the astropy ``unit``."""
+    return BINARY_RANGES[table, key].bounds(unit)
 BINARY_POTENTIALS = ("coupled", "gravity-gradient")
 _ELEMENTS = ("a", "e", "i", "raan", "argp", "true_anomaly")
 
@@ -94,7 +181,8 @@ def _table(ctx, data, name):
 
 
 def _moments(ctx, where, raw):
-    m = parse_vector(ctx, where, raw, 3, U.INERTIA, dimensionless=False, bounds=(1e-20, 1e45))
+    table = "primary" if where.startswith("[primary]") else "body"
+    m = parse_vector(ctx, where, raw, 3, U.INERTIA, dimensionless=False, bounds=_bounds(table, "inertia", U.INERTIA))
     try:
         check_triangle(m)
     except InputError as exc:
@@ -124,7 +212,7 @@ def _attitude(ctx, table, where, required=True):
         out["q"] = np.array([1.0, 0.0, 0.0, 0.0])
     if "omega" in table:
         out["omega"] = parse_vector(ctx, f"[{where}] omega", table["omega"], 3, U.RATE, dimensionless=False,
-                                    bounds=(-1e4, 1e4))
+                                    bounds=_bounds(where, "omega", U.RATE))
     elif "Q" in table:
         out["Q"] = parse_plain_vector(ctx, f"[{where}] Q", table["Q"], 4)
     elif required:
@@ -249,11 +337,12 @@ def _parse_impulses(ctx, raw):
     out = []
     for j, imp in enumerate(raw):
         where = f"[[orbit.impulses]] {j}"
-        if not isinstance(imp, dict) or set(imp) != {"time", "delta_v"}:
+        if not isinstance(imp, dict) or set(imp) != set(IMPULSE_KEYS):
             raise ctx.error(where, f"{imp!r}: give exactly time = '...' and delta_v = [radial, along-track, normal]")
         t = parse_quantity(ctx, f"{where} time", imp["time"], U.TIME, dimensionless=False)
         if not t > 0:
             raise ctx.error(f"{where} time", f"{imp['time']!r} must be after the start (> 0)")
-        dv = parse_vector(ctx, f"{where} delta_v", imp["delta_v"], 3, U.LENGTH / U.TIME, dimensionless=False)
+        dv = parse_vector(ctx, f"{where} delta_v", imp["delta_v"], 3, U.LENGTH / U.TIME, dimensionless=False,
+                          bounds=_bounds("orbit.impulses", "delta_v", U.LENGTH / U.TIME))
         out.append((t, dv))
     return out

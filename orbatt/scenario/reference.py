@@ -1,6 +1,7 @@
 """The scenario reference, ``docs/scenarios.md``, generated from the schema's own tables
 (:data:`orbatt.scenario.schema.KEY_DOCS`, :data:`orbatt.scenario.sweep_schema.SWEEP_KEY_DOCS`,
-:data:`orbatt.scenario.sweep_schema.PARAMETERS`) so that it cannot drift from what
+:data:`orbatt.scenario.sweep_schema.PARAMETERS`, and a binary's
+:data:`orbatt.scenario.binary_schema.BINARY_KEY_DOCS`) so that it cannot drift from what
 :func:`orbatt.load_scenario` accepts.
 
 Regenerate with ``python -m orbatt.scenario.reference > docs/scenarios.md``;
@@ -49,14 +50,15 @@ def _escape(text):
     return str(text).replace("|", "\\|")
 
 
-def _table(rows, table=None):
+def _table(rows, table=None, ranges=range_text):
     """Markdown rows of ``(key, (dimension, default, meaning))``, with each key's range
-    (:func:`orbatt.scenario.ranges.range_text`) when ``table`` is given."""
+    (``ranges(table, key, dimension)``, default :func:`orbatt.scenario.ranges.range_text`)
+    when ``table`` is given."""
     if table is None:
         out = ["| key | dimension | default | meaning |", "|---|---|---|---|"]
         return out + [f"| `{k}` | {_escape(d)} | {_escape(df)} | {_escape(m)} |" for k, (d, df, m) in rows]
     out = ["| key | dimension | range | default | meaning |", "|---|---|---|---|---|"]
-    return out + [f"| `{k}` | {_escape(d)} | {_escape(range_text(table, k, d))} | {_escape(df)} | {_escape(m)} |"
+    return out + [f"| `{k}` | {_escape(d)} | {_escape(ranges(table, k, d))} | {_escape(df)} | {_escape(m)} |"
                   for k, (d, df, m) in rows]
 
 
@@ -75,6 +77,12 @@ def markdown() -> str:
             lines += ["### `[[body.wheels]]`", "", "One table per reaction wheel (with `[control]`, or free "
                       "wheels).", ""]
             lines += _table(((k, KEY_DOCS["body.wheels"][k]) for k in KEY_DOCS["body.wheels"]), "body.wheels") + [""]
+        if table == "control":
+            lines += ["### `[[control.modes]]`", "", "A sequence of modes run by the flight software (instead of "
+                      "`law`; needs `period`): each mode's law acts until its condition holds at a tick, then the "
+                      "next's (`docs/flight-software.md`).", ""]
+            lines += _table(((k, KEY_DOCS["control.modes"][k]) for k in KEY_DOCS["control.modes"]),
+                            "control.modes") + [""]
     lines += ["## `[sweep]`", "", "Optional: many cases run by `orbatt sweep` (manual: `docs/sweeps.md`); "
               "`orbatt run` runs the nominal case.", ""]
     lines += _table((k, SWEEP_KEY_DOCS[k]) for k in SWEEP_KEYS) + [""]
@@ -85,7 +93,44 @@ def markdown() -> str:
         hi = ")" if p.high_open else "]"
         lim = "" if p.low == float("-inf") and p.high == float("inf") else f"{lo}{p.low:g}, {p.high:g}{hi}"
         lines.append(f"| `{name}` | `[{p.group}]` | {p.kind} | {lim} | {_escape(p.long_name)} |")
+    lines += [""] + _binary()
     return "\n".join(lines) + "\n"
+
+
+BINARY_INTRO = """## Binary asteroids: `[orbit] provider = "coupled"`
+
+The relative orbit (primary -> secondary) integrated with the secondary's attitude and, with a
+`[primary]`, the primary's (`docs/design.md` §12). Such a scenario has its own tables, below;
+every other table and key is refused ([torques], [environment], [control], facets and wheels
+until asked for); `orbatt run` and `orbatt sweep` run it as any scenario. Its `[sweep]` varies
+the keys by their paths (`"body.mass"`, `"orbit.impulses[0].delta_v[1]"`, `"primary.omega[2]"`).
+
+- `[sweep]` keys: {sweep_keys}
+- `[sweep] outputs`: {outputs} (default: all)
+"""
+
+
+def _binary():
+    """The binary tables (:data:`orbatt.scenario.binary_schema.BINARY_KEY_DOCS`, their ranges
+    :data:`~orbatt.scenario.binary_schema.BINARY_RANGES`)."""
+    from .binary_schema import BINARY_KEY_DOCS, BINARY_RANGES, BINARY_TABLES
+    from .binary_sweep_schema import BINARY_OUTPUTS, BINARY_SWEEP_KEYS
+
+    def ranges(table, key, dimension):
+        r = BINARY_RANGES.get((table, key))
+        return r.text() if r is not None else range_text(None, key, dimension)  # angles
+
+    lines = [BINARY_INTRO.format(sweep_keys=", ".join(f"`{k}`" for k in BINARY_SWEEP_KEYS),
+                                 outputs=", ".join(f"`{k}`" for k in BINARY_OUTPUTS))]
+    for table, keys in BINARY_TABLES.items():
+        lines += [f"### `[{table}]` (binary)", ""]
+        docs = BINARY_KEY_DOCS[table]
+        lines += _table(((k, docs[k]) for k in docs if k in keys), table, ranges) + [""]
+        if table == "orbit":
+            lines += ["#### `[[orbit.impulses]]` (binary)", "", "One table per impulse.", ""]
+            docs = BINARY_KEY_DOCS["orbit.impulses"]
+            lines += _table(((k, docs[k]) for k in docs), "orbit.impulses", ranges) + [""]
+    return lines
 
 
 def undocumented_keys():
@@ -101,6 +146,12 @@ def undocumented_keys():
     out += [("body.facets", k) for k in sorted(FACET_KEYS ^ set(KEY_DOCS.get("body.facets", {})))]
     out += [("body.wheels", k) for k in sorted(WHEEL_KEYS ^ set(KEY_DOCS.get("body.wheels", {})))]
     out += [("sweep", k) for k in sorted(set(SWEEP_KEYS) ^ set(SWEEP_KEY_DOCS))]
+    from .binary_schema import BINARY_KEY_DOCS, BINARY_TABLES, IMPULSE_KEYS
+
+    tables = dict(BINARY_TABLES, **{"orbit.impulses": IMPULSE_KEYS})
+    out += [(f"binary {table}", k) for table, keys in tables.items()
+            for k in sorted(set(keys) ^ set(BINARY_KEY_DOCS.get(table, {})))]
+    out += [(f"binary {table}", None) for table in set(BINARY_KEY_DOCS) - set(tables)]
     return out
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from .. import units as U
 from ..dataset import DIMENSIONLESS_UNITS
 from ..units import INTERNAL_UNITS
-from .paths import leaf_quantity, resolve, split_path
+from .paths import ALIAS_PATHS, leaf_quantity, resolve, split_path
 from .study_schema import parse_study_keys
 from .fields import parse_int, parse_quantity
 from ..orbits import R_EARTH
@@ -309,11 +309,14 @@ DEFAULT_LEAVES = {("body.facets", "drag_coefficient"): 2.2, ("body.facets", "spe
 FIXED_TABLES = ("sweep", "integration", "name", "description")
 
 
-def path_unit(ctx, path, data):
+def path_unit(ctx, path, data, given=None):
     """The unit text of the numeric scenario key at ``path`` (None for a plain number), checked:
     the path exists in ``data``, is not in :data:`FIXED_TABLES`, holds a number (a
     ``"<number> <unit>"`` string or a plain number), not an epoch; raises
-    :class:`~orbatt.scenario.ScenarioError` naming the path."""
+    :class:`~orbatt.scenario.ScenarioError` naming the path. A plain ``0`` (a zero needs no
+    unit: ``raan = 0``) takes the unit of the parameter's table ``given`` (its first value,
+    mean, low, high or std with a unit), so that it varies by values with units; each case's
+    scenario then checks that unit against the key."""
     where = f'[sweep.parameters."{path}"]'
     try:
         steps = split_path(path)
@@ -334,12 +337,49 @@ def path_unit(ctx, path, data):
         _, unit = leaf_quantity(leaf)
     except ValueError as exc:
         raise ctx.error(where, f"{exc}: only numeric keys vary") from None
+    if unit is None and not isinstance(leaf, str) and leaf == 0:
+        unit = _given_unit(given)
     if unit is not None:
         try:
             U.parse_unit(unit)
         except Exception:  # noqa: BLE001 - the scenario's own check names it better
             raise ctx.error(where, f"{leaf!r} is not a number with a unit: only numeric keys vary") from None
     return unit
+
+
+def _given_unit(d):
+    """The unit text of the first value with a unit in a parameter's table ``d`` (its values,
+    then mean, low, high, std), or None."""
+    if not isinstance(d, dict):
+        return None
+    vals = d.get("values")
+    cands = (vals if isinstance(vals, list) else []) + [d.get(k) for k in ("mean", "low", "high", "std")]
+    for x in cands:
+        if isinstance(x, str):
+            try:
+                unit = leaf_quantity(x)[1]
+            except ValueError:
+                continue
+            if unit is not None:
+                return unit
+    return None
+
+
+def _check_one_spelling(ctx, raw):
+    """Refuse a key varied twice: under a parameter's name and its path (``inertia1`` and
+    ``"body.inertia[0]"``), or under two spellings of one path (``"initial.omega[0]"`` and
+    ``"initial.omega[00]"``), naming both."""
+    seen = {}
+    for name in raw:
+        path = ALIAS_PATHS.get(name, name)
+        try:
+            key = tuple(split_path(path))
+        except ValueError:
+            continue  # not a path: refused by its own check
+        if key in seen:
+            raise ctx.error(f'[sweep.parameters] "{name}"', f'varies the same key as "{seen[key]}" ({path}); give '
+                                                           "each key once")
+        seen[key] = name
 
 
 def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame, conservative=True, control=None,
@@ -393,7 +433,8 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
                 raise ctx.error(f"[sweep.parameters] {name}", f"unknown parameter; give a scenario path such as "
                                                               f"\"control.gain\" or \"initial.omega[0]\", or one of "
                                                               f"{', '.join(PARAMETERS)}")
-            paths[name] = path_unit(ctx, name, data)
+            paths[name] = path_unit(ctx, name, data, raw[name])
+    _check_one_spelling(ctx, raw)
     if paths and "attitude_angle" in raw:
         raise ctx.error("[sweep.parameters] attitude_angle", "combines with the named parameters only; vary "
                                                              "\"initial.q[k]\" or the Euler angles by their paths")

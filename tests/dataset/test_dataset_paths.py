@@ -41,9 +41,13 @@ def test_unsafe_names_are_refused_naming_name(name, match):
 
 
 def test_long_name_counts_the_suffix():
-    D.file_name("x" * 250, ".nc")
+    """And the temporary's decoration (.tmp-NAME.PID.HEX, 25 bytes at most): the file must fit
+    in 255 bytes through its temporary name too."""
+    D.file_name("x" * 227, ".nc")
     with pytest.raises(InputError, match="too long"):
-        D.file_name("x" * 250, "-attitude.png")
+        D.file_name("x" * 227, "-attitude.png")
+    with pytest.raises(InputError, match="too long"):
+        D.file_name("x" * 250, ".nc")
 
 
 # ------------------------------------------------------------------------------------------
