@@ -356,8 +356,7 @@ def _execute(sweep, parts, reused, covered, *, scheduler, workers, chunk_size, p
                 chunk_size = max(1, min(chunk_size, math.ceil(TASK_SECONDS / max(_per_case(marks), 1e-3))))
         todo = chunk_ranges(~covered, int(chunk_size))
         state["chunks_total"] = state["k_done"] + len(todo)
-        if not auto:
-            report(0, 0)
+        report(0, 0)  # (again after the probe: where the rest runs)
         if synchronous:
             for a, b in todo:
                 here(a, b)
