@@ -193,6 +193,16 @@ class PDControl:
         A rate-limited eigenaxis slew (Wie, Weiss & Arapostathis 1989): the rate the law asks
         for, ``-(kp / kd) e``, is scaled down to ``|omega_c| <= max_rate`` (``max_torque``
         then acts as the acceleration limit); needs ``kd > 0``. Default: none.
+    dump_gain : Quantity (1/s), optional
+        Momentum management (``actuator = "wheels"``): magnetorquers dump the wheels' momentum
+        ``h`` (body axes) with the cross-product law ``m = dump_gain (h x B) / |B|^2``, each
+        axis clipped to ``dump_max_dipole``, so that ``m x B = -dump_gain h_perp`` (the part of
+        ``h`` normal to the field) while unclipped; the torque ``m x B`` is external and the
+        dipole the Dataset's ``dipole_control``. Reads the potential's magnetic field along the
+        orbit. With a ``period`` the dipole is computed at the ticks and held (``m x B(t)``
+        follows the field). Default: no dumping.
+    dump_max_dipole : Quantity (A m^2), optional
+        The magnetorquers' per-axis limit (required with ``dump_gain``).
     ki : Quantity (N m / s), optional
         Integral gain: ``- ki s``, ``s`` the integral of the attitude error (conditional
         integration stops an axis while its command is saturated and the error would drive it
@@ -208,7 +218,7 @@ class PDControl:
     law = "pd"
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
-                 target_axis=None, max_rate=None, ki=None, period=None):
+                 target_axis=None, max_rate=None, ki=None, period=None, dump_gain=None, dump_max_dipole=None):
         if target not in TARGETS:
             raise InputError(f"target: {target!r} is not one of {', '.join(map(repr, TARGETS))}")
         if actuator not in ACTUATORS:
@@ -222,6 +232,7 @@ class PDControl:
         if self.max_rate is not None and not self.kd > 0:
             raise InputError("max_rate: the rate-limited slew needs kd > 0 (the rate loop's gain)")
         self.ki = _value(ki, u.N * u.m / u.s, "ki", nonnegative=True, allow_none=True)
+        self.dump_gain, self.dump_max_dipole = _dumping(actuator, dump_gain, dump_max_dipole)
         self.target_q = self.target_axis = None
         if target == "inertial" and target_q is None:
             raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
@@ -273,12 +284,14 @@ class PDControl:
         return {"law": self.law, "target": self.target, "kp": self.kp, "kd": self.kd, "max_torque": self.max_torque,
                 "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
                 "target_axis": None if self.target_axis is None else self.target_axis.tolist(),
-                "max_rate": self.max_rate, "ki": self.ki, "period": self.period}
+                "max_rate": self.max_rate, "ki": self.ki, "period": self.period, "dump_gain": self.dump_gain,
+                "dump_max_dipole": self.dump_max_dipole}
 
     @property
     def reads_orbit(self):
-        """Whether the law reads the orbit: the orbital frame or the Sun as its target."""
-        return self.target != "inertial"
+        """Whether the law reads the orbit: the orbital frame or the Sun as its target, or the
+        magnetic field along it (momentum dumping)."""
+        return self.target != "inertial" or self.dump_gain is not None
 
     def model_row(self, wheels, tables):
         """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
@@ -294,6 +307,19 @@ class PDControl:
             hit = rows[key] = (sun, self.row(wheels, sun))
         return hit[1]
 
+    def model_rows(self, wheels, tables):
+        """The law's model rows: its :meth:`model_row`, then with ``dump_gain`` the
+        :data:`~orbatt.core.model.MOMENTUM_DUMP` row of its magnetorquers, which reads the
+        magnetic field along the orbit (``tables("field")``) and holds its dipole (with a
+        ``period``) after the PD law's state."""
+        rows = [self.model_row(wheels, tables)]
+        if self.dump_gain is not None:
+            pd = rows[0][1]
+            slots = dict(command_slots(self.period, wheels), z0=pd[kc.CTL_Z0] + pd[kc.CTL_NZ])
+            rows.append((km.MOMENTUM_DUMP, kc.dump_params(self.dump_gain, U.to_kernel(self.dump_max_dipole, "dipole"),
+                                                          **slots), tables("field")))
+        return rows
+
     def describe(self):
         d = {"law": "pd", "target": self.target, "kp_N_m": self.kp, "kd_N_m_s": self.kd,
              "max_torque_N_m": self.max_torque, "actuator": self.actuator}
@@ -303,6 +329,9 @@ class PDControl:
             d["max_rate_rad_s"] = self.max_rate
         if self.ki is not None:
             d["ki_N_m_per_s"] = self.ki
+        if self.dump_gain is not None:
+            d["dump_gain_per_s"] = self.dump_gain
+            d["dump_max_dipole_A_m2"] = self.dump_max_dipole
         if self.target_q is not None:
             d["target_q"] = self.target_q.tolist()
         if self.target_axis is not None:
@@ -312,6 +341,24 @@ class PDControl:
     def __repr__(self):
         return (f"PDControl(target={self.target!r}, kp={self.kp:.4g} N m, kd={self.kd:.4g} N m s, "
                 f"actuator={self.actuator!r})")
+
+
+def _dumping(actuator, gain, max_dipole):
+    """``(dump_gain 1/s, dump_max_dipole A m^2)`` of a PD law (None, None: no dumping), checked:
+    both or neither, on wheels."""
+    k = _value(gain, 1 / u.s, "dump_gain", positive=True, allow_none=True)
+    mmax = _value(max_dipole, u.A * u.m**2, "dump_max_dipole", positive=True, allow_none=True)
+    if k is None and mmax is None:
+        return None, None
+    if k is None:
+        raise InputError("dump_max_dipole: only read with dump_gain (momentum dumping); give both or neither")
+    if mmax is None:
+        raise InputError("dump_max_dipole: momentum dumping (dump_gain) needs the magnetorquers' per-axis limit, "
+                         "e.g. dump_max_dipole = '0.2 A m2'")
+    if actuator != "wheels":
+        raise InputError(f"dump_gain: momentum dumping unloads reaction wheels; it needs actuator = 'wheels' "
+                         f"(actuator is {actuator!r})")
+    return k, mmax
 
 
 class BDotControl:

@@ -35,6 +35,7 @@ from astropy import units as u
 
 from .control import ACTUATORS, PERIOD_RANGE, TARGETS, BDotControl, PDControl
 from .errors import InputError
+from .modes import Mode, ModeSequence
 
 __all__ = ["LawKey", "LawVar", "Law", "COMMON_KEYS", "LAWS", "LAW_CLASSES", "CONTROL_KEYS", "control_law", "law_of",
            "control_key_docs", "control_ranges"]
@@ -86,13 +87,15 @@ class LawKey:
 class LawVar:
     """A Dataset variable a law writes beyond ``torque_control``: ``(time, axis)``, body axes;
     ``values`` names the kernel output (``"dipole"``) and ``kind`` its
-    :data:`orbatt.units.KERNEL_UNITS` quantity."""
+    :data:`orbatt.units.KERNEL_UNITS` quantity; ``when(settings) -> bool``: the settings under
+    which the law writes it (None: always)."""
 
     name: str
     values: str
     kind: str
     unit: str
     long_name: str
+    when: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -145,19 +148,32 @@ class Law:
         """The keys the law needs."""
         return tuple(k.key for k in self.keys if k.required)
 
-    def writes(self, name):
-        """Whether the law writes the Dataset variable ``name`` (``torque_control``: all)."""
-        return name == "torque_control" or any(v.name == name for v in self.variables)
+    def writes(self, name, settings=None):
+        """Whether the law writes the Dataset variable ``name`` (``torque_control``: all) with
+        ``settings`` (a variable written under some settings only counts when they are given
+        and say so)."""
+        return name == "torque_control" or any(v.name == name for v in self.variables_of(settings))
+
+    def variables_of(self, settings=None):
+        """The :class:`LawVar` the law writes with ``settings`` (None: those it always writes)."""
+        return tuple(v for v in self.variables if v.when is None or (settings is not None and v.when(settings)))
+
+
+def _dumps(s):
+    """Whether PD settings (plain, or a scenario's raw ``[control]``) dump the wheels' momentum."""
+    return s.get("dump_gain") is not None
 
 
 def _pd_fields(s):
-    return ("sun",) if s.get("target") == "sun" else ()
+    return (("sun",) if s.get("target") == "sun" else ()) + (("field",) if _dumps(s) else ())
 
 
 def _pd_scales(s, inertia, b):
     kp, kd = s["kp"], s["kd"]
     return [(math.sqrt(kp / inertia), "[control] kp", f"the PD law's bandwidth (kp = {kp:.3g} N m)"),
-            (kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {kd:.3g} N m s)")]
+            (kd / inertia, "[control] kd", f"the PD law's damping rate (kd = {kd:.3g} N m s)")] + (
+        [(s["dump_gain"], "[control] dump_gain", f"momentum dumping's rate (dump_gain = {s['dump_gain']:.3g} 1/s)")]
+        if _dumps(s) else [])
 
 
 def _bdot_scales(s, inertia, b):
@@ -198,9 +214,19 @@ PD = Law(
             unit="rad / s", range=(1e-9, 10.0), sign="positive"),
      LawKey("ki", "torque / time (N m / s)", "0", "integral gain on the attitude error (PID), with anti-windup "
             "(no integration on an axis while its command saturates)", unit="N m / s", range=(0.0, 1e6),
-            sign="nonnegative")) + COMMON_KEYS,
+            sign="nonnegative"),
+     LawKey("dump_gain", "rate (1/s)", "none (no dumping)",
+            "momentum management with actuator = 'wheels': magnetorquers dump the wheels' momentum h (body axes) with "
+            "m = dump_gain (h x B) / |B|^2, each axis clipped to dump_max_dipole (m x B = -dump_gain h_perp, an "
+            "external torque; the dipole is held between ticks with a period); reads [environment] magnetic_field",
+            unit="1 / s", range=(1e-9, 10.0), sign="positive"),
+     LawKey("dump_max_dipole", "magnetic moment (A m2)", "required with dump_gain",
+            "per-axis limit of the dumping magnetorquers' dipole", unit="A m2", range=(1e-9, 1e5),
+            sign="positive")) + COMMON_KEYS,
+    variables=(LawVar("dipole_control", "dipole", "dipole", "A m^2",
+                      "momentum-dumping magnetic dipole (body components)", when=_dumps),),
     fields=_pd_fields, holds_frame=lambda s: s.get("target") in ("orbital", "inertial"), time_scales=_pd_scales,
-    reads_orbit=lambda s: s.get("target") != "inertial")
+    reads_orbit=lambda s: s.get("target") != "inertial" or _dumps(s))
 
 BDOT = Law(
     "bdot", "B-dot", "B-dot detumbling with magnetorquers", BDotControl,
@@ -211,8 +237,31 @@ BDOT = Law(
     variables=(LawVar("dipole_control", "dipole", "dipole", "A m^2", "B-dot magnetic dipole (body components)"),),
     fields=lambda s: ("field",), time_scales=_bdot_scales)
 
-#: the control laws by name (``[control] law``)
-LAWS = {law.name: law for law in (PD, BDOT)}
+#: the conditions of a mode (``[[control.modes]]``) besides its law's keys: key -> (SI unit, meaning)
+MODE_KEYS = {"name": (None, "the mode's name (an identifier; a CF flag meaning of the Dataset's mode)"),
+             "until_time": ("s", "leave the mode after this time in it"),
+             "until_rate": ("rad / s", "leave once |omega| has stayed below this for hold"),
+             "until_settled": ("rad", "leave once the PD law's attitude error has stayed below this for hold"),
+             "hold": ("s", "how long until_rate / until_settled must hold (default 0)")}
+
+
+def _sub_laws(s):
+    return [(LAWS[m["law"]], m) for m in s.get("modes") or ()]
+
+
+MODE_SEQUENCE = Law(
+    "modes", "the mode sequence", "a sequence of laws ([[control.modes]]) left at the flight software's ticks",
+    ModeSequence,
+    (LawKey("modes", "array of tables", "none",
+            "[[control.modes]]: each a mode with name, law and that law's keys, and until_time, until_rate, "
+            "until_settled, hold; in order, the last stays", "modes"),) + COMMON_KEYS,
+    variables=(LawVar("dipole_control", "dipole", "dipole", "A m^2", "magnetorquers' dipole (body components)"),),
+    fields=lambda s: tuple(sorted({f for law, m in _sub_laws(s) for f in law.fields(m)})),
+    time_scales=lambda s, inertia, b: [x for law, m in _sub_laws(s) for x in law.time_scales(m, inertia, b)],
+    reads_orbit=lambda s: any(law.reads_orbit(m) for law, m in _sub_laws(s)))
+
+#: the control laws by name (``[control] law``; a mode sequence is ``[[control.modes]]``)
+LAWS = {law.name: law for law in (PD, BDOT, MODE_SEQUENCE)}
 #: the API classes of the laws
 LAW_CLASSES = tuple(law.cls for law in LAWS.values())
 #: the ``[control]`` keys: ``law`` and every law's keys
@@ -239,12 +288,44 @@ def control_law(settings):
     (:class:`~orbatt.errors.InputError` naming the key)."""
     settings = dict(settings)
     law = law_of(settings.pop("law", None))
+    if law is MODE_SEQUENCE:
+        return _mode_sequence(settings)
     units = law.units
     unknown = sorted(set(settings) - set(units))
     if unknown:
         raise InputError(f"{unknown[0]}: not read by law = {law.name!r}; its keys: {', '.join(units)}")
     kw = {k: v if units[k] is None or v is None else v * u.Unit(units[k]) for k, v in settings.items()}
     return law.cls(**kw)
+
+
+def _mode_sequence(settings):
+    """The :class:`~orbatt.modes.ModeSequence` of plain settings (``modes``: each mode's
+    :data:`MODE_KEYS` and its law's settings; ``period``)."""
+    unknown = sorted(set(settings) - {"modes", "period"})
+    if unknown:
+        raise InputError(f"{unknown[0]}: not read by a mode sequence; its keys: modes, period")
+    period = settings.get("period")
+    modes = []
+    for m in settings.get("modes") or ():
+        m = dict(m)
+        kw = {k: m.pop(k) for k in list(m) if k in MODE_KEYS}
+        kw = {k: v if MODE_KEYS[k][0] is None or v is None else v * u.Unit(MODE_KEYS[k][0]) for k, v in kw.items()}
+        m.setdefault("period", period)
+        modes.append(Mode(kw.pop("name", None), control_law(m), **kw))
+    return ModeSequence(modes, period=None if period is None else period * u.s)
+
+
+def reads_field(raw):
+    """Whether a scenario's raw ``[control]`` table (before parsing) has a law that reads the
+    magnetic field along the orbit (B-dot, a PD law that dumps momentum; any mode's), so that
+    ``[environment] magnetic_field`` is read without ``[torques]``."""
+    if not isinstance(raw, dict):
+        return False
+    if isinstance(raw.get("modes"), list):
+        return any(reads_field(m) for m in raw["modes"])
+    name = raw.get("law")
+    law = LAWS.get(name) if isinstance(name, str) else None
+    return law is not None and "field" in law.fields(raw)
 
 
 def _owners(key):
@@ -254,8 +335,8 @@ def _owners(key):
 def control_key_docs():
     """The ``[control]`` rows of the reference: ``{key: (dimension, default, meaning)}``, ``law``
     first, then each law's keys in order (a key of some laws only says whose)."""
-    docs = {"law": (" | ".join(map(repr, LAWS)), "required",
-                    "; ".join(f"{law.name}: {law.summary}" for law in LAWS.values()))}
+    docs = {"law": (" | ".join(repr(n) for n in LAWS if n != "modes"), "required (or modes)",
+                    "; ".join(f"{law.name}: {law.summary}" for law in LAWS.values() if law.name != "modes"))}
     for law in LAWS.values():
         for k in law.keys:
             if k.key in docs:
@@ -263,6 +344,18 @@ def control_key_docs():
             owners = _owners(k.key)
             default = f"required for {', '.join(owners)}" if k.default == "required" else k.default
             docs[k.key] = (k.dimension, default, f"{', '.join(owners)}: {k.meaning}")
+    return docs
+
+
+def mode_key_docs():
+    """The ``[[control.modes]]`` rows of the reference: a mode's conditions, then its law."""
+    dims = {"name": "name", "until_time": "time", "until_rate": "angular rate", "until_settled": "angle",
+            "hold": "time"}
+    docs = {k: (dims[k], "required" if k == "name" else ("0" if k == "hold" else "none"), meaning)
+            for k, (_, meaning) in MODE_KEYS.items()}
+    docs["law"] = (" | ".join(repr(n) for n in LAWS if n != "modes"), "required",
+                   "the mode's law, with that law's [control] keys (period excepted: the flight software's, in "
+                   "[control])")
     return docs
 
 

@@ -46,26 +46,21 @@ def command_size(model):
     """The number of state components that hold the flight software's commands (issue 32):
     the ``nz`` slots of the model's control rows (0 without a law that has a period), after
     ``q, Q`` and the wheels' momenta."""
-    terms, params, _ = model
-    return sum(int(params[terms[j, km.P0] + kc.CTL_NZ]) for j in range(1, terms.shape[0])
-               if int(terms[j, km.KIND]) in (km.PD_CONTROL, km.BDOT_CONTROL))
+    return controller_start(model).size
 
 
 def controller_start(model):
     """The initial values of the controllers' state components (:func:`command_size` of them):
-    NaN for a held command not issued yet (the flight software's first tick issues it), 0 for
-    a PD law's integral of its error."""
+    all 0 (finite: the step loop's error norm reads them); the driver's first tick issues the
+    held commands and starts a mode sequence (:func:`orbatt.core.gyrostat.tick`), a PD law's
+    integral of its error starts at 0."""
     terms, params, _ = model
     out = []
     for j in range(1, terms.shape[0]):
         kind, p0 = int(terms[j, km.KIND]), int(terms[j, km.P0])
-        if kind not in (km.PD_CONTROL, km.BDOT_CONTROL):
+        if kind not in (km.PD_CONTROL, km.BDOT_CONTROL, km.MODES, km.MOMENTUM_DUMP):
             continue
-        vals = np.full(int(params[p0 + kc.CTL_NZ]), np.nan)
-        if kind == km.PD_CONTROL and params[p0 + kc.PD.ki] > 0.0:
-            zi = int(params[p0 + kc.PD.zi]) - int(params[p0 + kc.CTL_Z0])
-            vals[zi:zi + 3] = 0.0
-        out.append(vals)
+        out.append(np.zeros(int(params[p0 + kc.CTL_NZ])))
     return np.concatenate(out) if out else np.empty(0)
 
 
@@ -170,10 +165,12 @@ def assemble(potential, bodies, control=None) -> KernelSpec:
     if wheels:
         rows.append(wheels_row(wheels))
     if control is not None:
-        row = control.model_row(wheels, _field_tables(potential, control))
+        tables = _field_tables(potential, control)
+        own = control.model_rows(wheels, tables) if hasattr(control, "model_rows") else [control.model_row(wheels,
+                                                                                                         tables)]
         if control.reads_orbit and orbit_row[0] == km.ORBIT_NONE:
             raise InputError(f"control: {control!r} reads the orbit (its target or its field), and "
                              f"{type(potential).__name__} has none; give a potential with an orbit (a gravity gradient, "
                              "orbatt.EnvironmentTorques(orbit, t_end, ...))")
-        rows.append(row)
+        rows.extend(own)
     return KernelSpec(*km.build(orbit=orbit_row, terms=rows))

@@ -124,7 +124,7 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     check_extended(cls, kernel)
     z0 = controller_start(kernel)
     nz = z0.size
-    if nz:  # the controllers' states: held commands unset (NaN) until the first tick, integrals 0
+    if nz:  # the controllers' states (held commands, integrals, modes), issued at the driver's first tick
         if not getattr(cls, "ticks", False):
             raise InputError(f"method: {cls.name!r} cannot run a control law with a flight-software period or an "
                              "integral (their states are knots and components of the compiled step loop); use "

@@ -31,6 +31,7 @@ from .environment.atmosphere import NRLMSIS, PiecewiseExponentialAtmosphere
 from .environment.tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES,
                                   TABLE_MARGIN, tabulate_along_orbit)
 from .control import BDotControl, PDControl
+from .modes import ModeSequence
 from .errors import InputError
 from .orbits.base import OrbitProvider
 from .potentials import Potential, kernel_backed
@@ -271,10 +272,19 @@ class EnvironmentTorques(Potential):
         self.residual_dipole = dip
         self.atmosphere, self.magnetic_field = atmosphere, magnetic_field
         self.shadow, self.corotation = shadow, bool(corotation)
-        if control is not None and not isinstance(control, (PDControl, BDotControl)):
-            raise InputError(f"control: expected orbatt.PDControl or orbatt.BDotControl, got {type(control).__name__}")
+        if control is not None and not isinstance(control, (PDControl, BDotControl, ModeSequence)):
+            raise InputError(f"control: expected orbatt.PDControl, orbatt.BDotControl or an orbatt.modes.ModeSequence, "
+                             f"got {type(control).__name__}")
+        if isinstance(control, ModeSequence):  # its modes' laws, checked one by one below
+            for law in [m.law for m in control.modes]:
+                if isinstance(law, BDotControl) and magnetic_field is None:
+                    raise InputError("magnetic_field: a B-dot mode needs a field model (igrf or dipole)")
+                if isinstance(law, PDControl) and law.target == "sun" and epoch is None:
+                    raise InputError("epoch: a mode pointing at the Sun needs the orbit's epoch (the Sun's position)")
         if isinstance(control, BDotControl) and magnetic_field is None:
             raise InputError("magnetic_field: B-dot control needs a field model (igrf or dipole)")
+        if getattr(control, "dump_gain", None) is not None and magnetic_field is None:
+            raise InputError("magnetic_field: momentum dumping (dump_gain) needs a field model (igrf or dipole)")
         if isinstance(control, PDControl) and control.target == "sun" and epoch is None:
             raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
         self.control = control

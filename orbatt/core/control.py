@@ -56,15 +56,26 @@ ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
 #: ``period`` (s; 0: a continuous law), the origin ``phase`` of its tick grid (``t_k = phase +
 #: k period``), where its held command lies in the state (``z0``: ``y[z0:z0 + nz]``, after the
 #: wheels' momenta) and its size ``nz`` (0 for a continuous law)
-FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1))
+FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1), ("mode", 1))
 #: the parameter layouts (module docstring): one wheel, the PD law, B-dot
 WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1))
 PD = Slots(*FLIGHT_SOFTWARE, ("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4),
            ("max_rate", 1), ("ki", 1), ("zi", 1), tail="pinv")
 BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
-#: the flight-software slots, the same in every law's row
-CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ = PD.period, PD.phase, PD.z0, PD.nz
-assert (BDOT.period, BDOT.phase, BDOT.z0, BDOT.nz) == (CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ)
+#: a mode sequence (:data:`~orbatt.core.model.MODES`, issue 32 item 4): its state ``y[z0:z0 + 4]``
+#: is ``(mode, entry time, time its conditions began to hold, whether they hold)``; ``count`` modes, then per mode the
+#: tail :data:`MODE_FIELDS`: leave after ``until_time`` in the mode, or once ``|omega| <
+#: until_rate`` or the attitude error ``< until_settled`` (rad) has held for ``hold`` (``inf``:
+#: no such condition; any condition met leaves; the last mode stays)
+MODES = Slots(*FLIGHT_SOFTWARE, ("count", 1), tail="conditions")
+MODE_FIELDS = 4
+MODE_UNTIL_TIME, MODE_UNTIL_RATE, MODE_UNTIL_SETTLED, MODE_HOLD = 0, 1, 2, 3
+#: the flight-software slots, the same in every law's row (``mode``: the row acts in that
+#: mode of the sequence only; -1: always)
+CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ, CTL_MODE = PD.period, PD.phase, PD.z0, PD.nz, PD.mode
+assert (BDOT.period, BDOT.phase, BDOT.z0, BDOT.nz, BDOT.mode) == (CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ, CTL_MODE)
+assert (MODES.period, MODES.phase, MODES.z0, MODES.nz, MODES.mode) == (CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ,
+                                                                       CTL_MODE)
 #: the floats of one wheel, and of the PD law before the wheels' pseudo-inverse
 WHEEL_SIZE = WHEEL.size
 PD_HEADER = PD.size
@@ -89,6 +100,16 @@ def wheel_params(axes, inertia, max_torque, max_speed):
     return np.concatenate([[float(n)], *rows])
 
 
+def modes_params(period, z0, conditions, phase=0.0):
+    """The parameters of a :data:`~orbatt.core.model.MODES` row: the flight software's
+    ``period`` (> 0), its state at ``y[z0:z0 + 3]``, and ``conditions (n, MODE_FIELDS)``."""
+    if not period > 0.0:
+        raise ValueError("a mode sequence needs the flight software's period")
+    c = np.asarray(conditions, dtype=np.float64).reshape(-1, MODE_FIELDS)
+    return MODES.pack(tail=c, count=float(c.shape[0]), nz=4.0, mode=-1.0,
+                      **flight_software(period, phase, z0))
+
+
 def flight_software(period=0.0, phase=0.0, z0=8):
     """The flight-software slots of a law's row (:data:`FLIGHT_SOFTWARE`) but ``nz``: a
     continuous law (``period = 0``) or one evaluated at the ticks ``phase + k period`` whose
@@ -96,6 +117,11 @@ def flight_software(period=0.0, phase=0.0, z0=8):
     if not (period >= 0.0 and np.isfinite(period)):
         raise ValueError(f"period: {period!r} must be finite and >= 0")
     return dict(period=float(period), phase=float(phase), z0=float(z0))
+
+
+def law_slots(nz, mode=-1):
+    """The rest of a law's flight-software slots: its state's size ``nz`` and its ``mode``."""
+    return dict(nz=float(nz), mode=float(mode))
 
 
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None, period=0.0,
@@ -123,7 +149,7 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     nint = 3 if ki > 0.0 else 0
     head = dict(target=float(target), kp=kp, kd=kd, max_torque=max_torque,
                 actuator=ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, c=c,
-                nz=float(ncmd + nint), max_rate=float(max_rate), ki=float(ki),
+                max_rate=float(max_rate), ki=float(ki), **law_slots(ncmd + nint),
                 zi=fs["z0"] + ncmd if nint else -1.0, **fs)
     if wheel_axes is None:
         return PD.pack(**head)
@@ -137,7 +163,7 @@ def bdot_params(gain, max_dipole, period=0.0, phase=0.0, z0=8):
     """The parameters of a :data:`~orbatt.core.model.BDOT_CONTROL` row (:data:`BDOT`;
     ``period, phase, z0``: :func:`flight_software`, the held command: the dipole, 3)."""
     fs = flight_software(period, phase, z0)
-    return BDOT.pack(gain=gain, max_dipole=max_dipole, nz=3.0 if fs["period"] > 0 else 0.0, **fs)
+    return BDOT.pack(gain=gain, max_dipole=max_dipole, **law_slots(3 if fs["period"] > 0 else 0), **fs)
 
 
 @jit_inline
@@ -331,3 +357,59 @@ def bdot_dipole(q, omega, b_s, bdot_s, params, p0):
     wb = cross(omega, b)
     return (clip(-gain * (db[0] - wb[0]), mmax), clip(-gain * (db[1] - wb[1]), mmax),
             clip(-gain * (db[2] - wb[2]), mmax)), b
+
+
+# ---------------------------------------------------------------------------------------
+# Momentum management (issue 32 item 5): magnetorquers dump the wheels' momentum
+
+#: the layout of a :data:`~orbatt.core.model.MOMENTUM_DUMP` row (it follows the PD law's row
+#: on wheels): the flight-software slots (the law's period; its held dipole, 3, after the PD
+#: law's state), the gain ``k`` (1/s) and the magnetorquers' per-axis limit
+DUMP = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
+assert (DUMP.period, DUMP.phase, DUMP.z0, DUMP.nz) == (CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ)
+_DU_GAIN, _DU_MMAX = DUMP.gain, DUMP.max_dipole
+
+
+def dump_params(gain, max_dipole, period=0.0, phase=0.0, z0=8):
+    """The parameters of a :data:`~orbatt.core.model.MOMENTUM_DUMP` row (:data:`DUMP`): the
+    gain ``k`` (1/s), the per-axis dipole limit (internal units), ``period, phase, z0``:
+    :func:`flight_software` (the held command: the dipole, 3)."""
+    if not (gain > 0.0 and np.isfinite(gain)):
+        raise ValueError(f"gain: {gain!r} must be finite and positive")
+    if not max_dipole > 0.0:
+        raise ValueError(f"max_dipole: {max_dipole!r} must be positive")
+    fs = flight_software(period, phase, z0)
+    return DUMP.pack(gain=float(gain), max_dipole=float(max_dipole), **law_slots(3 if fs["period"] > 0 else 0),
+                     **fs)
+
+
+@jit_inline
+def wheels_momentum(y, params, w0):
+    """The wheels' momentum ``h = sum h_k a_k`` (body axes; ``y[8 + k]`` the axial momenta,
+    the wheels' parameters from ``params[w0]``; zero without wheels), summed as
+    :func:`orbatt.core.gyrostat.body_rate` sums it."""
+    h0 = h1 = h2 = 0.0
+    if w0 < 0:
+        return (h0, h1, h2)
+    for k in range(int(params[w0])):
+        w = w0 + 1 + WHEEL_SIZE * k
+        hk = y[8 + k]
+        h0 += hk * params[w + _W_AXIS]
+        h1 += hk * params[w + _W_AXIS + 1]
+        h2 += hk * params[w + _W_AXIS + 2]
+    return (h0, h1, h2)
+
+
+@jit_inline
+def dump_dipole(h, b, params, p0):
+    """The dumping dipole ``m = k (h x B) / |B|^2`` (body axes, each axis clipped to the row's
+    ``max_dipole``; :data:`DUMP` at ``params[p0]``) for the wheels' momentum ``h`` and the field
+    ``b`` (body axes): unclipped, ``m x B = -k h_perp``, ``h_perp`` the part of ``h`` normal to
+    ``B``. Zero in a zero field."""
+    b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2]
+    if not b2 > 0.0:
+        return (0.0, 0.0, 0.0)
+    f = params[p0 + _DU_GAIN] / b2
+    mmax = params[p0 + _DU_MMAX]
+    c = cross(h, b)
+    return (clip(f * c[0], mmax), clip(f * c[1], mmax), clip(f * c[2], mmax))

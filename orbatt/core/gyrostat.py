@@ -25,8 +25,9 @@ import numpy as np
 from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
-from .model import (BDOT_CONTROL, FLAGS, KIND, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, R0, R1, WHEELS, orbit_at,
+from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, R0, R1, WHEELS, orbit_at,
                     orbit_radial, terms_at)
+from .model import MOMENTUM_DUMP
 from .kepler import anomaly_of_time, time_of_anomaly
 from .qalg import qconj, qmul, qmul_pure, rotate_inv
 from .torques import gradient_of_torque
@@ -36,6 +37,34 @@ _W_AXIS, _W_IW = ctl.WHEEL.axis, ctl.WHEEL.iw
 _PD_ACTUATOR = ctl.PD_ACTUATOR
 _CTL_PERIOD, _CTL_PHASE, _CTL_Z0, _CTL_NZ = ctl.CTL_PERIOD, ctl.CTL_PHASE, ctl.CTL_Z0, ctl.CTL_NZ
 _PD_KI, _PD_ZI, _PD_TMAX = ctl.PD.ki, ctl.PD.zi, ctl.PD.max_torque
+_CTL_MODE = ctl.CTL_MODE
+_MD_COUNT, _MD_COND = ctl.MODES.count, ctl.MODES.conditions
+_MD_FIELDS = ctl.MODE_FIELDS
+_MD_TIME, _MD_RATE, _MD_SETTLED, _MD_HOLD = (ctl.MODE_UNTIL_TIME, ctl.MODE_UNTIL_RATE, ctl.MODE_UNTIL_SETTLED,
+                                             ctl.MODE_HOLD)
+
+
+@jit_inline
+def is_flight_software(kind):
+    """Whether a row kind carries the flight-software slots (:data:`orbatt.core.control.FLIGHT_SOFTWARE`)."""
+    return kind == PD_CONTROL or kind == BDOT_CONTROL or kind == MODES or kind == MOMENTUM_DUMP
+
+
+@jit_inline
+def current_mode(terms, params, y):
+    """The mode the model's sequence is in (its state ``y[z0]``; -1 without a sequence)."""
+    for j in range(1, terms.shape[0]):
+        if terms[j, KIND] == MODES:
+            return y[int(params[terms[j, P0] + _CTL_Z0])]
+    return -1.0
+
+
+@jit_inline
+def row_active(params, p0, mode):
+    """Whether a law's row acts in ``mode`` (:func:`current_mode`): a row of no mode always."""
+    rm = params[p0 + _CTL_MODE]
+    return rm < 0.0 or rm == mode
+
 
 
 @jit_inline
@@ -107,9 +136,13 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
     app = (0.0, 0.0, 0.0)
     m = (0.0, 0.0, 0.0)
     n = terms.shape[0]
+    mode = current_mode(terms, params, y)
     for j in range(1, n):
         kind = terms[j, KIND]
         p0 = terms[j, P0]
+        if is_flight_software(kind):
+            if not row_active(params, p0, mode):  # a law of another mode of the sequence
+                continue
         if kind == PD_CONTROL:
             wheels = params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS
             if params[p0 + _CTL_PERIOD] > 0.0:
@@ -149,6 +182,17 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 b = rotate_inv(q, b_s)
             else:
                 m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
+            tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
+            ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
+            app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+        elif kind == MOMENTUM_DUMP:  # magnetorquers unloading the wheels: the external torque m x B(t)
+            b4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+            b = rotate_inv(q, (b4[0], b4[1], b4[2]))
+            if params[p0 + _CTL_PERIOD] > 0.0:  # the dipole held since the last tick
+                z0 = int(params[p0 + _CTL_Z0])
+                m = (y[z0], y[z0 + 1], y[z0 + 2])
+            else:
+                m = ctl.dump_dipole(ctl.wheels_momentum(y, params, w0), b, params, p0)
             tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
             ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
             app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
@@ -212,7 +256,7 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
     nw = wheel_count(params, w0)
     nz = 0
     for j in range(1, terms.shape[0]):
-        if terms[j, KIND] == PD_CONTROL or terms[j, KIND] == BDOT_CONTROL:
+        if is_flight_software(terms[j, KIND]):
             nz += int(params[terms[j, P0] + _CTL_NZ])
     if Y.shape[1] != 8 + nw + nz:
         raise ValueError("evaluate_extended: the states lack the wheels' momenta or the flight software's held "
@@ -270,7 +314,7 @@ def has_ticks(terms, params):
     """Whether a control law of the model runs at a flight-software period."""
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
-        if (kind == PD_CONTROL or kind == BDOT_CONTROL) and params[terms[j, P0] + _CTL_PERIOD] > 0.0:
+        if is_flight_software(kind) and params[terms[j, P0] + _CTL_PERIOD] > 0.0:
             return True
     return False
 
@@ -288,7 +332,7 @@ def next_tick(s, terms, params):
         t = time_of_anomaly(s, math.sin(s), orb)
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
-        if kind != PD_CONTROL and kind != BDOT_CONTROL:
+        if not is_flight_software(kind):
             continue
         p0 = terms[j, P0]
         period = params[p0 + _CTL_PERIOD]
@@ -310,25 +354,31 @@ def tick(s, y, inertia, terms, params, table, work, start):
     """The flight software at ``s`` (the step loops' independent variable) on the state ``y``:
     each law with a period evaluates itself on ``y`` and writes the command it holds until
     its next tick into ``y[z0:z0 + nz]`` (the PD law's torque, or its wheels' motor torques
-    clipped to the motors' limits; B-dot's dipole). ``start``: the first call of a run, where
-    a law evaluates if its command is unset (NaN: a run that starts) or ``s`` is one of its
-    ticks (a run resumed there); else every law evaluates (the loop landed on a tick of one of
-    them, and the others' ticks are checked here)."""
+    clipped to the motors' limits; B-dot's dipole). ``start``: the start of a run (the driver
+    calls it once, before the step loop), where every law evaluates and a mode sequence begins
+    in its first mode; else the laws whose tick ``s`` is evaluate (the loop landed on a tick of
+    one of them)."""
     t, _, r, xhat, v = orbit_at(s, terms, params, table, work)
     q = (y[0], y[1], y[2], y[3])
     w0 = wheel_row(terms)
     w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
     omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
+    for j in range(1, terms.shape[0]):  # the mode sequence first: its transition, then the laws
+        if terms[j, KIND] == MODES:
+            mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j, start)
+    mode = current_mode(terms, params, y)
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
-        if kind != PD_CONTROL and kind != BDOT_CONTROL:
+        if kind != PD_CONTROL and kind != BDOT_CONTROL and kind != MOMENTUM_DUMP:
             continue
         p0 = terms[j, P0]
+        if not row_active(params, p0, mode):
+            continue
         period = params[p0 + _CTL_PERIOD]
         if not period > 0.0:
             continue
         z0 = int(params[p0 + _CTL_Z0])
-        if not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params) and not (start and np.isnan(y[z0])):
+        if not start and not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params):
             continue
         if kind == PD_CONTROL:
             sun = (0.0, 0.0, 0.0)
@@ -348,9 +398,76 @@ def tick(s, y, inertia, terms, params, table, work, start):
                 tmax = params[p0 + _PD_TMAX]
                 for k in range(3):
                     y[zi + k] += period * ctl.windup_gate(raw[k], e[k], ki, tmax)
+        elif kind == MOMENTUM_DUMP:  # the dumping dipole of the wheels' momentum and the field at the tick
+            b4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+            m = ctl.dump_dipole(ctl.wheels_momentum(y, params, w0), rotate_inv(q, (b4[0], b4[1], b4[2])), params, p0)
+            y[z0] = m[0]
+            y[z0 + 1] = m[1]
+            y[z0 + 2] = m[2]
         else:
             b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
             m, _ = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
             y[z0] = m[0]
             y[z0 + 1] = m[1]
             y[z0 + 2] = m[2]
+
+
+@jit_inline
+def _pd_row_sun(j, t, terms, table, work):
+    """The Sun's position (inertial) of PD row ``j``'s table at ``t`` (zeros without one)."""
+    sun = (0.0, 0.0, 0.0)
+    if terms[j, R1] > terms[j, R0]:
+        s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+        sun = (s4[0], s4[1], s4[2])
+    return sun
+
+
+@jit
+def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, jm, start):
+    """The mode sequence of row ``jm`` at a tick ``s`` (time ``t``) on the state ``y``: at the
+    start of a run (its state unset), mode 0 from ``t``; on one of its ticks, leave the current
+    mode for the next when its ``until_time`` has passed since it began, or when its other
+    conditions (``|omega| < until_rate``; the attitude error of the mode's PD law ``<
+    until_settled``; all those given) have held for ``hold``. The state ``y[z0:z0 + 3]`` is
+    ``(mode, entry time, time the conditions began to hold, whether they hold)``; the last
+    mode stays. (No NaN in the state: the step loop's error norm reads every component.)"""
+    p0 = terms[jm, P0]
+    z = int(params[p0 + _CTL_Z0])
+    if start:
+        y[z] = 0.0
+        y[z + 1] = t
+        y[z + 2] = t
+        y[z + 3] = 0.0
+        return
+    if not _on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params):
+        return
+    m = int(y[z])
+    if m >= int(params[p0 + _MD_COUNT]) - 1:
+        return
+    c = p0 + _MD_COND + _MD_FIELDS * m
+    leave = t - y[z + 1] >= params[c + _MD_TIME]
+    rate, settled = params[c + _MD_RATE], params[c + _MD_SETTLED]
+    if rate < np.inf or settled < np.inf:
+        holds = True
+        if rate < np.inf:
+            holds = math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]) < rate
+        if settled < np.inf:
+            angle = np.inf
+            for j in range(1, terms.shape[0]):  # the attitude error of the mode's PD law
+                if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
+                    e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, _pd_row_sun(j, t, terms, table, work))
+                    angle = 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
+            holds = holds and angle < settled
+        if holds:
+            if y[z + 3] == 0.0:
+                y[z + 2] = t
+                y[z + 3] = 1.0
+            if t - y[z + 2] >= params[c + _MD_HOLD]:
+                leave = True
+        else:
+            y[z + 3] = 0.0
+    if leave:
+        y[z] = float(m + 1)
+        y[z + 1] = t
+        y[z + 2] = t
+        y[z + 3] = 0.0

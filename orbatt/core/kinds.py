@@ -31,6 +31,9 @@ PD control             7     :func:`orbatt.core.control.pd_params`; table: the S
 B-dot control          8     ``[gain, max dipole]``; table: the field ``B`` (inertial)
 constant body torque   9     ``[tau1, tau2, tau3]`` (body axes): thruster misalignment,
                              outgassing; reads nothing (a torque: ``G = -2 q (0, tau)``)
+momentum dumping       10    :func:`orbatt.core.control.dump_params` (:data:`~orbatt.core.control.DUMP`):
+                             magnetorquers unloading the wheels, ``m = k (h x B) / |B|^2``; table:
+                             the field ``B`` (inertial); follows a PD law's row on wheels
 =====================  ====  =====================================================================
 
 Adding a kind: a :class:`TermKind` here, its kernel (a function of ``(q, c)`` and its
@@ -91,6 +94,9 @@ KINDS = (
     TermKind(7, "control", "a PD control law", velocity=True, extended=True),
     TermKind(8, "control", "a B-dot control law", orbit=True, table=True, extended=True),
     TermKind(9, "constant", "a constant body torque"),
+    TermKind(10, "control", "momentum dumping with magnetorquers", orbit=True, table=True, extended=True),
+    # the flight software's mode sequence: which law rows act (issue 32 item 4)
+    TermKind(11, "modes", "a mode sequence of control laws", extended=True),
 )
 #: the kinds by code
 BY_CODE = {k.code: k for k in KINDS}

@@ -87,6 +87,8 @@ WHEELS = 6
 PD_CONTROL = 7
 BDOT_CONTROL = 8
 CONSTANT_TORQUE = 9
+MOMENTUM_DUMP = 10
+MODES = 11
 #: what each term kind is, in words (error messages: a method refusing the terms that act)
 KIND_DESCRIPTIONS = {k.code: k.description for k in KINDS}
 

@@ -206,14 +206,9 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         ticks = False
         if EXTENDED:
             ticks = has_ticks(terms, params)
+        # (the commands held from the start are issued by the driver before the first call:
+        # orbatt.methods.dop853, tick(..., start=True))
         if (flags & FLAG_F0_VALID) == 0:
-            if EXTENDED:
-                if ticks:  # the first call: the commands held from the start
-                    if LANES:
-                        for l in range(nl):
-                            tick(t, yg[:, l], I[:, l], terms, params, table, work, True)
-                    else:
-                        tick(t, y1, inertia, terms, params, table, work, True)
             if LANES:
                 if EXTENDED:
                     rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])

@@ -15,6 +15,8 @@ from ..core import gyrostat as kg
 from ..core import potentials as kp
 from ..methods.problem import kernel_spec
 from ..model_assembly import command_size
+from ..core import control as kc
+from ..core import model as km
 from ..laws import law_of
 from ..units import from_kernel
 from .content import Var
@@ -55,7 +57,8 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
         ``omega`` (rad/s) and ``kinetic_energy`` (body + rotors, kg km^2 s^-2) of the gyrostat,
         and ``wheel_momentum`` (kg km^2/s, axial, absolute), ``wheel_speed`` (rad/s, relative to
         the body), ``wheel_torque`` (N m, motor) with a ``wheel`` dimension; with a control law
-        ``torque_control`` (N m, body axes) and, for B-dot, ``dipole_control`` (A m^2).
+        ``torque_control`` (N m, body axes) and, for B-dot and momentum dumping, ``dipole_control``
+        (A m^2).
     """
     control = trajectory.control
     wheels = body.wheels
@@ -112,9 +115,37 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
                                       comment=("reaction of the wheels' motors (internal)" if
                                                getattr(control, "actuator", "") == "wheels" else "external torque"))
         outputs = {"dipole": m}  # the kernel's outputs a law may write (orbatt.laws.LawVar.values)
-        for var in law_of(control).variables:
+        for var in law_of(control).variables_of(control.settings()):
             data[var.name] = _var(vv, from_kernel(outputs[var.values], var.kind), var.unit, var.long_name, frame="B")
+        col = mode_column(model, n)
+        if col is not None:  # a mode sequence (orbatt.modes): its state (mode, entry time, ...)
+            names = control.names
+            mode = zs[..., col].reshape(q.shape[:-1])
+            data["mode"] = _var(tdims, np.where(np.isnan(mode), -1, mode).astype(np.int8), "1",
+                                "mode of the flight software's sequence", flag_values=np.arange(len(names), dtype=np.int8),
+                                flag_meanings=" ".join(names),
+                                comment="the mode at the output time (a transition at a tick acts from that tick)")
+            entry = np.full(tuple(mode.shape[:-1]) + (len(names),), np.nan)
+            began = zs[..., col + 1].reshape(q.shape[:-1])
+            for k in range(len(names)):
+                at = np.where(mode == k, began, np.nan)
+                with np.errstate(all="ignore"):
+                    entry[..., k] = np.nanmin(np.where(np.isnan(at), np.inf, at), axis=-1)
+            entry[np.isinf(entry)] = np.nan
+            data["mode_entry_time"] = _var(tdims[:-1] + ("mode_index",), entry, units["time"],
+                                           "time each mode of the sequence began (NaN: not entered by the last output)",
+                                           comment="mode_index k is flag value k of the variable mode: "
+                                                   + ", ".join(f"{k} = {nm}" for k, nm in enumerate(names)))
     return data
+
+
+def mode_column(model, nwheels):
+    """The column of a mode sequence's state in a trajectory's ``command`` (None without one)."""
+    terms, params, _ = model
+    for j in range(1, terms.shape[0]):
+        if int(terms[j, km.KIND]) == km.MODES:
+            return int(params[terms[j, km.P0] + kc.CTL_Z0]) - 8 - nwheels
+    return None
 
 
 def wheel_coordinates(body, units):

@@ -31,7 +31,7 @@ from astropy import units as u
 
 from ..control import reaction_wheel
 from ..errors import InputError
-from ..laws import CONTROL_KEYS, LAWS, control_law
+from ..laws import CONTROL_KEYS, LAWS, MODE_KEYS, control_law
 from ..methods import METHODS
 from .fields import parse_choice, parse_plain_vector, parse_quantity
 from .ranges import RANGES
@@ -99,15 +99,16 @@ def _checked(ctx, settings, wheels):
     return settings
 
 
-def _law_settings(ctx, law, c):
-    """The settings (SI floats) of ``[control]`` ``c`` for ``law`` (:class:`orbatt.laws.Law`),
-    each key parsed and checked as its :class:`~orbatt.laws.LawKey` says."""
+def _law_settings(ctx, law, c, table="[control]"):
+    """The settings (SI floats) of ``[control]`` ``c`` (or a mode's ``table``) for ``law``
+    (:class:`orbatt.laws.Law`), each key parsed and checked as its
+    :class:`~orbatt.laws.LawKey` says."""
     missing = [k for k in law.required if k not in c]
     if missing:
-        raise ctx.error(f"[control] {missing[0]}", f"missing; {law.title} needs {' and '.join(law.required)}")
+        raise ctx.error(f"{table} {missing[0]}", f"missing; {law.title} needs {' and '.join(law.required)}")
     out = {"law": law.name}
     for k in law.keys:
-        where = f"[control] {k.key}"
+        where = f"{table} {k.key}"
         if k.key not in c:
             out[k.key] = k.fallback
         elif k.kind == "choice":
@@ -148,6 +149,66 @@ def _law_fields(ctx, law, settings, data, orbit):
     return field
 
 
+#: the laws ``[control] law`` names (a mode sequence is written [[control.modes]])
+SINGLE_LAWS = tuple(name for name in LAWS if name != "modes")
+
+
+def _mode_sequence(ctx, c, data, orbit, wheels, out):
+    """``[[control.modes]]``: each mode's name, conditions and law's settings (checked as a
+    single law's), the sequence's ``period``; the field the laws read."""
+    for key in c:
+        if key not in ("modes", "period"):
+            raise ctx.error(f"[control] {key}", "not read with [[control.modes]]: give each mode its law's keys in its "
+                                                "[[control.modes]] table (the period is the flight software's, here)")
+    if "period" not in c:
+        raise ctx.error("[control] period", "missing; a mode sequence needs the flight software's period (its "
+                                            "transitions are decided at its ticks), e.g. period = '1 s'")
+    seq = LAWS["modes"]
+    period = _law_settings(ctx, seq, {"period": c["period"]})["period"]
+    raw = c["modes"]
+    if not isinstance(raw, list) or not raw or not all(isinstance(m, dict) for m in raw):
+        raise ctx.error("[[control.modes]]", "must be a non-empty array of tables ([[control.modes]] ...)")
+    modes, fields = [], set()
+    for i, m in enumerate(raw):
+        where = f"[[control.modes]] {i + 1}"
+        if "law" not in m:
+            raise ctx.error(f"{where} law", f"missing; give law = {' or '.join(map(repr, SINGLE_LAWS))}")
+        law = LAWS[parse_choice(ctx, f"{where} law", m["law"], SINGLE_LAWS)]
+        allowed = {"law", "period"} | set(law.units) | set(MODE_KEYS)
+        for key in m:
+            if key not in allowed:
+                raise ctx.error(f"{where} {key}", f"not read by a mode of law = {law.name!r}; allowed: "
+                                                  f"{', '.join(sorted(allowed - {'period'}))}")
+        if "period" in m:
+            raise ctx.error(f"{where} period", "the flight software has one rate: give period in [control] only")
+        if "name" not in m or not isinstance(m["name"], str) or not m["name"].isidentifier():
+            raise ctx.error(f"{where} name", f"missing or not a name ({m.get('name')!r}); give e.g. name = 'detumble'")
+        settings = _law_settings(ctx, law, {k: v for k, v in m.items() if k in law.units or k == "law"}, where)
+        settings["period"] = period
+        _checked(ctx, settings, wheels)
+        for key, (unit, _) in MODE_KEYS.items():
+            if key == "name":
+                settings[key] = m[key]
+            elif key in m:
+                v = parse_quantity(ctx, f"{where} {key}", m[key], u.Unit(unit), dimensionless=False,
+                                   bounds=RANGES["control.modes", key])
+                if not (v > 0 or (key == "hold" and v >= 0)):
+                    raise ctx.error(f"{where} {key}", f"{m[key]!r} must be positive")
+                settings[key] = v
+            else:
+                settings[key] = None
+        field = _law_fields(ctx, law, settings, data, orbit)
+        fields |= {field} - {None}
+        modes.append(settings)
+    settings = {"law": "modes", "modes": modes, "period": period}
+    try:
+        control_law(settings)
+    except InputError as exc:
+        raise _api_error(ctx, "[control]", exc) from None
+    out["control"], out["magnetic_field"] = settings, (fields.pop() if fields else None)
+    return out
+
+
 def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
     """The control settings of a scenario, plain data: a dict of ``wheels`` (each wheel's
     settings, :meth:`~orbatt.control.ReactionWheel.settings`), ``control`` (the law's settings,
@@ -176,9 +237,15 @@ def parse_control(ctx, data, potential_kind, orbit, dimensionless, method):
     for key in c:
         if key not in CONTROL_KEYS:
             raise ctx.error(f"[control] {key}", f"unknown key; allowed: {', '.join(sorted(CONTROL_KEYS))}")
+    if "modes" in c:
+        if potential_kind != "gravity-gradient" or orbit is None:
+            raise ctx.error("[control]", f"control needs an orbit: use [potential] kind = 'gravity-gradient' with an "
+                                         f"[orbit] (this scenario is {potential_kind!r})")
+        return _mode_sequence(ctx, c, data, orbit, wheels, out)
     if "law" not in c:
-        raise ctx.error("[control] law", f"missing; give law = {' or '.join(map(repr, LAWS))}")
-    law = LAWS[parse_choice(ctx, "[control] law", c["law"], tuple(LAWS))]
+        raise ctx.error("[control] law", f"missing; give law = {' or '.join(map(repr, SINGLE_LAWS))}, or a sequence "
+                                         "of modes [[control.modes]]")
+    law = LAWS[parse_choice(ctx, "[control] law", c["law"], SINGLE_LAWS)]
     allowed = {"law"} | set(law.units)
     for key in c:
         if key not in allowed:

@@ -111,6 +111,10 @@ RANGES = {
     # the [torques] keys' ranges: from their descriptors (orbatt.terms)
     **{("torques", key): Range(None, high, unit, signed=True) for key, (high, unit) in torque_ranges().items()},
     **{("control", key): Range(low, high, unit) for key, (low, high, unit) in control_ranges().items()},
+    ("control.modes", "until_time"): Range(1e-6, 1e10, "s"),
+    ("control.modes", "until_rate"): Range(1e-9, 10.0, "rad / s"),
+    ("control.modes", "until_settled"): Range(1e-9, math.pi, "rad"),
+    ("control.modes", "hold"): Range(0.0, 1e10, "s"),
 }
 
 

@@ -75,7 +75,8 @@ from ..methods import METHODS
 from ..methods.dop853 import INDEPENDENT_VARIABLES
 from ..methods.problem import MAX_ATOL, MAX_RTOL
 from ..orbits import R_EARTH
-from ..laws import control_key_docs
+from ..laws import control_key_docs, mode_key_docs
+from ..laws import reads_field
 from ..terms import torque_key_docs
 
 __all__ = ["Spec", "parse", "RANGES", "TOP_KEYS", "TABLES", "KEY_DOCS", "REQUIRED_TABLES", "POTENTIAL_KINDS", "FRAMES",
@@ -213,6 +214,7 @@ max_steps    plain integer       1e8                             most step attem
 #: the [torques] keys are described by their terms (orbatt.terms)
 KEY_DOCS["torques"] = torque_key_docs()
 KEY_DOCS["control"] = control_key_docs()
+KEY_DOCS["control.modes"] = mode_key_docs()
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: central body radii (km) below which an apoapsis is refused
 BODY_RADII = {"earth": R_EARTH}
@@ -323,7 +325,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
     ctl = data.get("control")
-    torques = parse_torques(ctx, data, kind, orbit, bdot=isinstance(ctl, dict) and ctl.get("law") == "bdot")
+    torques = parse_torques(ctx, data, kind, orbit, bdot=reads_field(ctl))
     if torques is not None and dimless:
         raise ctx.error("[torques]", "the environment torques need a dimensional scenario ([body] inertia with units)")
     init = data["initial"]

@@ -79,7 +79,7 @@ def test_a_law_given_twice_or_of_the_wrong_type_is_refused():
     env = orbatt.EnvironmentTorques(ORBIT, T_END * u.s, gravity_gradient=True, control=pd)
     with pytest.raises(InputError, match="already carries a control law"):
         orbatt.propagate(body, _start(body), env, [0.0, 10.0], control=_pd())
-    with pytest.raises(InputError, match="control: expected one of PDControl, BDotControl, got str"):
+    with pytest.raises(InputError, match="control: expected one of PDControl, BDotControl, ModeSequence, got str"):
         orbatt.propagate(body, _start(body), orbatt.GravityGradient(ORBIT), [0.0, 10.0], control="pd")
 
 
