@@ -478,6 +478,8 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         })
 
     data.update(_torque_variables(tr.potential, tau, t, tdims))
+    if "sun_direction" not in data:  # a law pointing at the Sun without SRP: what it pointed at
+        data.update(_sun_direction(tr.potential, tr.control or getattr(tr.potential, "control", None), t))
     if not dimless:
         data.update(eclipse_variables(tr.potential, t, epoch_s))
     extra = control_variables(tr, body, inertia, t, tdims, U)
@@ -512,6 +514,31 @@ def si_form(variables):
             var = Var(var.dims, var.values * conv[1], dict(var.attrs, units=conv[0]))
         out[name] = var
     return out
+
+
+def _sun_direction(potential, control, t):
+    """``{"sun_direction": Var}`` for a control law with ``target = "sun"`` (the pointing figure
+    measures the error to it; SRP, which writes it otherwise, may be off): from the Sun's table
+    the law read (:meth:`orbatt.EnvironmentTorques.field_table`) inside the sampled span, else
+    from the Sun's model; empty for any other law."""
+    orbit = getattr(potential, "orbit", None)
+    if getattr(control, "target", None) != "sun" or orbit is None or getattr(orbit, "epoch", None) is None:
+        return {}
+    from ..core import environment as kenv
+    from ..core import kernel_floats
+    from ..environment import sun as esun
+
+    t = np.asarray(t, dtype=np.float64)
+    pos = np.asarray(_plain(orbit.state(t)[0], u.km), dtype=np.float64)
+    span = getattr(potential, "span", None)
+    if span is not None and t.size and span[0] <= t.min() and t.max() <= span[1] and hasattr(potential, "field_table"):
+        sun = kenv.piece_eval_many(potential.field_table("sun"), kernel_floats(t), 3)
+    else:
+        sun = np.asarray(esun.sun_position(orbit.epoch + t * u.s), dtype=np.float64)
+    d = sun - pos
+    dims, unit, long_name, extra = FIELD_VARIABLES["sun_direction"]
+    return {"sun_direction": _var(("time",) + dims, d / np.linalg.norm(d, axis=-1, keepdims=True), unit, long_name,
+                                  **extra)}
 
 
 def _torque_variables(potential, tau, t, tdims):

@@ -12,21 +12,24 @@ the Dataset's leading dimensions, ``(..., time)``.
 from __future__ import annotations
 
 import json
+from typing import NamedTuple
 
 import numpy as np
 from astropy import units as u
 
 from .. import quaternion as qt
+from ..orbital import lvlh_angles
 from ..units import parse_unit, unit_string
-from .plots import drift_series
+from .plots import _stored_scenario, _value_in, drift_series, impulse_times, log_values
 from .timeaxis import elapsed_values
 
-__all__ = ["FIGURES", "choose_figures", "control_law", "pointing_error", "eclipse_intervals", "wheel_limits",
-           "reference_rates", "thresholds", "rate_to_orbital_frame", "unit_factor", "values_in", "torque_terms",
-           "conserved", "log_floor"]
+__all__ = ["FIGURES", "LVLH_LABELS", "LVLH_DEFINITION", "Pointing", "choose_figures", "control_law",
+           "pointing_error", "eclipse_intervals", "wheel_limits", "reference_rates", "thresholds",
+           "rate_to_orbital_frame", "wheel_gyroscopic", "unit_factor", "values_in", "torque_terms", "conserved",
+           "log_values", "impulse_times", "libration_angle"]
 
 #: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
-FIGURES = ("pointing", "rates", "wheels", "torques", "drift")
+FIGURES = ("pointing", "orbit", "rates", "wheels", "torques", "drift")
 
 
 def _json_attr(ds, name):
@@ -69,6 +72,32 @@ def values_in(ds, name, unit):
     return np.asarray(ds[name].values, dtype=np.float64) * factor, label
 
 
+#: the names of the 3-2-1 angles relative to the orbital frame, as the Dataset's ``euler_321``
+#: defines them (:func:`orbatt.orbital.lvlh_angles`): the axis each one turns about
+LVLH_LABELS = ("roll (about o2, along-track)", "pitch (about o3, orbit normal)", "yaw (about o1, radial)")
+#: how they are defined, as the figures state it
+LVLH_DEFINITION = ("the Dataset's euler_321: yaw about o1, then pitch about o3, then roll about o2 "
+                   "(3-2-1 in the axes o2, o3, o1)")
+#: the names of the 3-2-1 angles of an error to an inertial target (:func:`orbatt.quaternion.to_euler321`)
+INERTIAL_LABELS = ("about target x", "about target y", "about target z")
+INERTIAL_DEFINITION = "3-2-1 of target_q~ q: z, then the new y, then the new x (orbatt.quaternion.to_euler321)"
+
+
+class Pointing(NamedTuple):
+    """What the pointing figure draws (:func:`pointing_error`)."""
+
+    #: the rotation angle of the error (rad, ``(..., time)``)
+    angle: np.ndarray
+    #: what the error is relative to
+    title: str
+    #: the error's three angles (rad, ``(..., time, 3)``), None for a Sun-pointing error (one angle)
+    components: np.ndarray | None = None
+    #: the names of the three angles, each with the axis it turns about
+    labels: tuple = ()
+    #: the sequence that defines them
+    definition: str = ""
+
+
 def pointing_error(ds):
     """The pointing error of a run, or None where it has no pointing reference.
 
@@ -82,10 +111,12 @@ def pointing_error(ds):
 
     Returns
     -------
-    tuple or None
-        ``(angle, title, components)``: ``angle`` (rad, ``(..., time)``), a title saying what it
-        is, and the roll, pitch, yaw of the error quaternion (rad, ``(..., time, 3)``; None for
-        a Sun-pointing error, which is one angle).
+    Pointing or None
+        The angle, a title saying what it is relative to, and its components: relative to the
+        orbital frame (or an offset target in it) roll, pitch and yaw exactly as the Dataset's
+        ``euler_321`` defines them (:data:`LVLH_LABELS`, :func:`orbatt.orbital.lvlh_angles`; for
+        an uncontrolled run they are ``euler_321`` itself); relative to an inertial target the
+        3-2-1 angles about the target's axes (:data:`INERTIAL_LABELS`); none for the Sun.
     """
     ctrl = control_law(ds)
     if ctrl is not None and ctrl["law"] == "bdot":
@@ -98,22 +129,29 @@ def pointing_error(ds):
         b = qt.rotate(np.asarray(ds["q"].values), np.broadcast_to(axis, ds["q"].shape[:-1] + (3,)))
         s = np.asarray(ds["sun_direction"].values)
         angle = np.arctan2(np.linalg.norm(np.cross(b, s), axis=-1), np.sum(b * s, axis=-1))
-        return angle, f"angle between body axis {axis.tolist()} and the Sun (PD target)", None
+        return Pointing(angle, f"angle between body axis {axis.tolist()} and the Sun (PD target)")
     if target == "inertial":
         qe = qt.mul(qt.conj(np.asarray(ctrl["target_q"], dtype=np.float64)), np.asarray(ds["q"].values))
         title = f"attitude error to the inertial target {np.round(ctrl['target_q'], 4).tolist()} (PD)"
+        labels, definition = INERTIAL_LABELS, INERTIAL_DEFINITION
+        qe = qt.normalize(qe)
+        components = np.stack(qt.to_euler321(qe), axis=-1)
     elif "q_orbital" in ds:
         q_orb = np.asarray(ds["q_orbital"].values)
         tq = ctrl.get("target_q") if target == "orbital" else None
+        offset = tq is not None and not np.allclose(np.abs(np.asarray(tq, dtype=np.float64)[0]), 1.0)
         qe = q_orb if tq is None else qt.mul(qt.conj(np.asarray(tq, dtype=np.float64)), q_orb)
         title = ("attitude error to the orbital frame target (PD)" if target == "orbital" else
                  "attitude relative to the orbital frame (no control)")
+        labels = LVLH_LABELS
+        definition = LVLH_DEFINITION + ("; of the error to target_q, in the target's axes" if offset else "")
+        qe = qt.normalize(qe)
+        components = np.stack(lvlh_angles(qe), axis=-1)
     else:
         return None
-    qe = qt.normalize(qe)
     # the rotation angle of qe, accurate at small angles: 2 atan2(|vector part|, |scalar part|)
     angle = 2.0 * np.arctan2(np.linalg.norm(qe[..., 1:], axis=-1), np.abs(qe[..., 0]))
-    return angle, title, np.stack(qt.to_euler321(qe), axis=-1)
+    return Pointing(angle, title, components, labels, definition)
 
 
 def eclipse_intervals(ds, x):
@@ -138,33 +176,6 @@ def eclipse_intervals(ds, x):
         out.append((x[max(k - 1, 0)] if k else x[k], x[j + 1] if j + 1 < n else x[j], bool(np.any(s[k:j + 1] <= 0.0))))
         k = j + 1
     return out
-
-
-def _stored_scenario(ds):
-    """The stored scenario's TOML tables (``scenario`` attribute), read as plain TOML: the run
-    validated them; ``{}`` without one or where it does not read."""
-    text = ds.attrs.get("scenario")
-    if not text:
-        return {}
-    try:
-        import tomllib
-
-        return tomllib.loads(str(text))
-    except (ImportError, ValueError):
-        return {}
-
-
-def _value_in(value, unit):
-    """A scenario value (``"6000 rpm"``, or a plain number: already in ``unit``, the
-    normalized scenarios' form) in ``unit``, or None where it is not one."""
-    if isinstance(value, bool) or value is None:
-        return None
-    try:
-        if isinstance(value, (int, float)):
-            return float(value)
-        return float(u.Quantity(str(value)).to_value(unit))
-    except (TypeError, ValueError, u.UnitsError):
-        return None
 
 
 def wheel_limits(ds):
@@ -253,6 +264,7 @@ def choose_figures(ds):
 
     - ``pointing``: a pointing reference (:func:`pointing_error`: a PD target, or the orbital
       frame of an uncontrolled run with an orbit);
+    - ``orbit``: a binary (``separation``): the mutual orbit, its period and the libration;
     - ``rates``: always (``omega``);
     - ``wheels``: reaction wheels (``wheel_speed``);
     - ``torques``: any torque (``torque``, ``torque_<term>``, ``torque_control``);
@@ -261,6 +273,8 @@ def choose_figures(ds):
     out = []
     if pointing_error(ds) is not None:
         out.append("pointing")
+    if "separation" in ds:
+        out.append("orbit")
     out.append("rates")
     if "wheel_speed" in ds:
         out.append("wheels")
@@ -271,10 +285,36 @@ def choose_figures(ds):
     return tuple(out)
 
 
-def log_floor(y):
-    """``y`` with values at or below 0 raised to a floor (a tenth of the smallest positive
-    value, or 1e-18), so that a log axis draws every point; non-finite values kept."""
-    y = np.asarray(y, dtype=np.float64)
-    pos = y[np.isfinite(y) & (y > 0)]
-    floor = pos.min() / 10.0 if pos.size else 1e-18
-    return np.where(y <= 0.0, floor, y)
+def wheel_gyroscopic(ds):
+    """The reaction wheels' gyroscopic term ``omega x h`` (N m, body components, ``(..., time,
+    3)``), ``h = sum_k h_k a_k`` the wheels' axial momenta along their axes: the torque the
+    control balances when the body turns with the wheels spun up (Euler's equations of the
+    gyrostat, ``J omega' = tau_ext + tau_control - omega x (J omega) - omega x h``). None
+    without wheels (``wheel_momentum``, ``wheel_axis``) or where the units do not convert."""
+    if not {"wheel_momentum", "wheel_axis", "omega"} <= set(ds.variables):
+        return None
+    w, wu = values_in(ds, "omega", "rad s^-1")
+    h, hu = values_in(ds, "wheel_momentum", "N m s")
+    if wu != "rad s^-1" or hu != "N m s":
+        return None
+    hvec = np.einsum("...k,ki->...i", h, np.asarray(ds["wheel_axis"].values, dtype=np.float64))
+    return np.cross(w, hvec)
+
+
+def libration_angle(ds):
+    """The secondary's in-plane libration of a binary (rad, ``(time,)``, in ``[-pi/2, pi/2)``):
+    the angle from the line of centres (``position``, primary to secondary) to the body axis 1
+    of ``q``, about the orbit normal ``position x velocity``, the axis' sign not counted; 0 for a
+    synchronous secondary with its long axis (axis 1) along that line. (The sweep output
+    ``max_libration_angle`` is the unsigned angle in space, ``arccos |b1 . r| / |r|``: the same
+    where axis 1 stays in the orbit plane.) None without ``position``, ``velocity`` and ``q``."""
+    if not {"position", "velocity", "q"} <= set(ds.variables):
+        return None
+    r = np.asarray(ds["position"].values, dtype=np.float64)
+    v = np.asarray(ds["velocity"].values, dtype=np.float64)
+    n = np.cross(r, v)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    rhat = r / np.linalg.norm(r, axis=-1, keepdims=True)
+    b1 = qt.rotate(np.asarray(ds["q"].values, dtype=np.float64), np.broadcast_to([1.0, 0.0, 0.0], r.shape))
+    angle = np.arctan2(np.sum(n * np.cross(rhat, b1), axis=-1), np.sum(rhat * b1, axis=-1))
+    return (angle + 0.5 * np.pi) % np.pi - 0.5 * np.pi  # the axis' sign does not count: (-pi/2, pi/2]

@@ -2,10 +2,12 @@
 figure layout, Euler angles, and the drift of the invariants. matplotlib is imported only
 when a plot is drawn.
 
-Every axis is labelled with its quantity and unit. Time is drawn as UTC dates when the
-Dataset has an epoch, in orbits when it has an orbit (and no epoch), else in its own unit
-(``time=`` chooses). Angles are unwrapped (no jumps of 360 degrees). Log axes draw exact
-zeros at the axis floor rather than leaving gaps.
+Every axis is labelled with its quantity and unit. Time is drawn as UTC dates for a run with
+an epoch spanning more than :data:`UTC_SPAN_S`, in orbits for a run with an orbit and no epoch,
+else as the time since the start in s, min, h or d by the run's length, the epoch named where
+there is one (``time=`` chooses). Angles are unwrapped (no jumps of 360 degrees). Log axes
+leave gaps at exact zeros (there is no value to draw on them) and say so in the panel's title.
+The impulses of a scenario (``[[orbit.impulses]]``) are marked on every time axis.
 """
 from __future__ import annotations
 
@@ -13,16 +15,23 @@ import json
 import math
 
 import numpy as np
+from astropy import units as u
 
 from .. import quaternion as qt
 from ..units import parse_unit, unit_string
 from .build import EULER_313_LABELS, EULER_321_LABELS
 from .timeaxis import elapsed_unit, elapsed_values
 
-__all__ = ["plot_state", "plot_attitude", "plot_drift", "time_axis", "drift_series"]
+__all__ = ["plot_state", "plot_attitude", "plot_drift", "time_axis", "time_values", "elapsed_scale", "drift_series",
+           "mark_impulses", "impulse_times", "log_values"]
 
 #: choices of the ``time`` argument of the plots
-TIME_AXES = ("auto", "utc", "orbits", "time")
+TIME_AXES = ("auto", "utc", "orbits", "time", "elapsed")
+#: ``"auto"`` draws UTC dates for a run with an epoch longer than this (s); a shorter one in
+#: the time since its start
+UTC_SPAN_S = 3 * 86400.0
+#: the units of the time since the start: ``(unit, seconds, longest span drawn in it)``
+ELAPSED_UNITS = (("s", 1.0, 1200.0), ("min", 60.0, 3 * 3600.0), ("h", 3600.0, 3 * 86400.0), ("d", 86400.0, np.inf))
 
 
 def member(ds, case=None):
@@ -48,34 +57,147 @@ def orbit_period(ds):
     return float(p) if p else None
 
 
+def elapsed_scale(span_s):
+    """``(unit, seconds)``: the unit a span of ``span_s`` seconds is drawn in
+    (:data:`ELAPSED_UNITS`: s up to 20 min, min up to 3 h, h up to 3 d, else d)."""
+    for unit, seconds, longest in ELAPSED_UNITS:
+        if span_s <= longest:
+            return unit, seconds
+    return ELAPSED_UNITS[-1][:2]
+
+
+def _time_mode(ds, time):
+    if time not in TIME_AXES:
+        raise ValueError(f"time: {time!r} is not one of {TIME_AXES}")
+    epoch = ds.orbatt.epoch
+    period = orbit_period(ds)
+    if time == "auto":
+        t = elapsed_values(ds)
+        span = float(np.nanmax(t) - np.nanmin(t)) if t.size else 0.0
+        dimensionless = elapsed_unit(ds) == "1"
+        time = ("utc" if epoch is not None and span > UTC_SPAN_S else "orbits" if epoch is None and period else
+                "time" if dimensionless else "elapsed")
+    if time == "utc" and epoch is None:
+        raise ValueError("time: 'utc' needs an epoch; this Dataset has none")
+    if time == "orbits" and not period:
+        raise ValueError("time: 'orbits' needs an orbit; this Dataset has none")
+    return time, epoch, period
+
+
+def time_values(ds, t, time="auto"):
+    """Times ``t`` (in the Dataset's ``elapsed`` unit: s, or the dimensionless time) on the
+    axis :func:`time_axis` draws with ``time``."""
+    mode, epoch, period = _time_mode(ds, time)
+    t = np.asarray(t, dtype=np.float64)
+    if mode == "utc":
+        base = np.datetime64(ds.orbatt.times().utc.datetime64[0], "ns")
+        t0 = float(elapsed_values(ds)[0])
+        return base + np.round((t - t0) * 1e9).astype("timedelta64[ns]")
+    if mode == "orbits":
+        return t / period
+    if mode == "elapsed" and elapsed_unit(ds) != "1":
+        all_t = elapsed_values(ds)
+        unit, seconds = elapsed_scale(float(np.nanmax(all_t) - np.nanmin(all_t)) if all_t.size else 0.0)
+        return t / seconds
+    return t
+
+
 def time_axis(ds, time="auto"):
     """``(values, label)`` of the time axis of a plot.
 
     Parameters
     ----------
     ds : xarray.Dataset
-    time : {"auto", "utc", "orbits", "time"}
+    time : {"auto", "utc", "orbits", "time", "elapsed"}
         ``"utc"``: dates (numpy datetime64, UTC) from the epoch; ``"orbits"``: time over the
-        orbital period; ``"time"``: the ``elapsed`` coordinate in its unit (s, or dimensionless). ``"auto"``: UTC
-        with an epoch, else orbits with an orbit, else time.
+        orbital period; ``"time"``: the ``elapsed`` coordinate in its unit (s, or
+        dimensionless); ``"elapsed"``: the same in s, min, h or d by the run's length
+        (:func:`elapsed_scale`), labelled with the epoch where there is one. ``"auto"``: UTC for
+        a run with an epoch longer than :data:`UTC_SPAN_S`, orbits for a run with an orbit and
+        no epoch, else ``"elapsed"``.
     """
-    if time not in TIME_AXES:
-        raise ValueError(f"time: {time!r} is not one of {TIME_AXES}")
+    mode, epoch, period = _time_mode(ds, time)
     t = elapsed_values(ds)
-    epoch = ds.orbatt.epoch
-    period = orbit_period(ds)
-    if time == "auto":
-        time = "utc" if epoch is not None else "orbits" if period else "time"
-    if time == "utc":
-        if epoch is None:
-            raise ValueError("time: 'utc' needs an epoch; this Dataset has none")
+    if mode == "utc":
         return ds.orbatt.times().utc.datetime64, f"UTC (from {epoch.utc.isot[:19]})"
-    if time == "orbits":
-        if not period:
-            raise ValueError("time: 'orbits' needs an orbit; this Dataset has none")
+    if mode == "orbits":
         return t / period, "time [orbits]"
     units = elapsed_unit(ds)
-    return t, ("time (dimensionless)" if units == "1" else f"elapsed time [{unit_string(parse_unit(units))}]")
+    if units == "1":
+        return t, "time (dimensionless)"
+    if mode == "elapsed":
+        unit, seconds = elapsed_scale(float(np.nanmax(t) - np.nanmin(t)) if t.size else 0.0)
+        since = f"time since {epoch.utc.isot[:19]} UTC" if epoch is not None else "elapsed time"
+        return t / seconds, f"{since} [{unit}]"
+    return t, f"elapsed time [{unit_string(parse_unit(units))}]"
+
+
+def _stored_scenario(ds):
+    """The stored scenario's TOML tables (``scenario`` attribute), read as plain TOML: the run
+    validated them; ``{}`` without one or where it does not read."""
+    text = ds.attrs.get("scenario")
+    if not text:
+        return {}
+    try:
+        import tomllib
+
+        return tomllib.loads(str(text))
+    except (ImportError, ValueError):
+        return {}
+
+
+def _value_in(value, unit):
+    """A scenario value (``"6000 rpm"``, or a plain number: already in ``unit``, the
+    normalized scenarios' form) in ``unit``, or None where it is not one."""
+    if isinstance(value, bool) or value is None:
+        return None
+    try:
+        if isinstance(value, (int, float)):
+            return float(value)
+        return float(u.Quantity(str(value)).to_value(unit))
+    except (TypeError, ValueError, u.UnitsError):
+        return None
+
+
+def log_values(y):
+    """``(y, zeros)``: ``y`` for a log axis - values at or below 0 (SRP in eclipse, an error of
+    exactly 0 at an aligned start) replaced by NaN, so that they are gaps, not points at a floor
+    no data has - and how many were (the figures say so in the line's label)."""
+    y = np.array(y, dtype=np.float64)
+    bad = np.isfinite(y) & (y <= 0.0)
+    y[bad] = np.nan
+    return y, int(np.count_nonzero(bad))
+
+
+def impulse_times(ds):
+    """The times (in the Dataset's ``elapsed`` unit) of the stored scenario's impulses
+    (``[[orbit.impulses]] time``: the deliberate Delta v of a binary), sorted; empty without."""
+    impulses = ((_stored_scenario(ds).get("orbit") or {}).get("impulses")) or []
+    unit = u.s if str(ds["elapsed"].attrs.get("units", "s")).strip() not in ("1", "") else None
+    out = []
+    for imp in impulses if isinstance(impulses, list) else []:
+        if isinstance(imp, dict):
+            value = imp.get("time")
+            t = (float(value) if isinstance(value, (int, float)) and not isinstance(value, bool)
+                 else _value_in(value, unit) if unit is not None else None)
+            if t is not None:
+                out.append(t)
+    return sorted(out)
+
+
+def mark_impulses(axes, ds, time="auto"):
+    """Mark the scenario's impulses (``[[orbit.impulses]]``: a binary's deliberate Delta v) on
+    each of ``axes`` (a time axis of :func:`time_axis` with ``time``) as a labelled vertical
+    line; returns how many."""
+    times = impulse_times(ds)
+    if not times:
+        return 0
+    xs = time_values(ds, times, time)
+    for ax in axes:
+        for k, xv in enumerate(np.atleast_1d(xs)):
+            ax.axvline(xv, color="tab:red", ls=":", lw=1.4,
+                       label="impulse (Delta v, [[orbit.impulses]])" if k == 0 else None)
+    return len(times)
 
 
 def _unit_label(quantity, units):
@@ -186,20 +308,12 @@ def drift_series(ds):
     return dX, f"{name}: |{sym} - {sym}0|", _unit_label("absolute change", eu)
 
 
-def _log_floor(y):
-    """``y`` with exact zeros raised to the axis floor (a tenth of the smallest positive
-    value, or 1e-18), so that a log axis has no gaps; non-finite values kept."""
-    y = np.asarray(y, dtype=np.float64)
-    pos = y[np.isfinite(y) & (y > 0)]
-    floor = pos.min() / 10.0 if pos.size else 1e-18
-    return np.where(y == 0.0, floor, y)
-
-
 def plot_drift(ds, case=None, fig=None, time="auto"):
     """Drift of the invariants on log axes: the energy or the Jacobi integral, or the energy
     change where nothing is conserved (:func:`drift_series`), ``| |q| - 1 |`` and the drift
     of ``q.Q`` from its initial value (the paper's printed data start at -9.7e-8). Exact
-    zeros are drawn at the axis floor. Returns the Figure."""
+    zeros are gaps (the first sample of a drift is one), counted in the panel's title; the
+    scenario's impulses are marked (they change the energy on purpose). Returns the Figure."""
     import matplotlib.pyplot as plt
 
     ds = member(ds, case)
@@ -213,9 +327,14 @@ def plot_drift(ds, case=None, fig=None, time="auto"):
               (np.abs(qQ - qQ[0]), "constraint q.Q: |q.Q - (q.Q)0|",
                _unit_label("|q.Q - (q.Q)0|", ds["qQ"].attrs.get("units", "1")))]
     for ax, (y, title, ylabel) in zip(axes, series):
-        ax.semilogy(x, _log_floor(y))
-        ax.set_title(title, fontsize="medium")
+        y, zeros = log_values(y)
+        ax.semilogy(x, y, color="tab:blue")
+        ax.set_title(title + (f"\n(exactly 0 at {zeros} of {y.size} samples: gaps)" if zeros else ""),
+                     fontsize="medium")
         ax.set_xlabel(label)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3, which="both")
+    if mark_impulses(axes, ds, time):  # said in the title: a legend would cover the data
+        axes[0].set_title(axes[0].get_title() + "\nred dotted: impulse (Delta v, [[orbit.impulses]])",
+                          fontsize="medium")
     return _finish(fig, x)
