@@ -142,7 +142,9 @@ def pointing_error(ds):
         offset = tq is not None and not np.allclose(np.abs(np.asarray(tq, dtype=np.float64)[0]), 1.0)
         qe = q_orb if tq is None else qt.mul(qt.conj(np.asarray(tq, dtype=np.float64)), q_orb)
         title = ("attitude error to the orbital frame target (PD)" if target == "orbital" else
-                 "attitude relative to the orbital frame (no control)")
+                 "attitude relative to the orbital frame (no control)" if ctrl is None else
+                 "attitude relative to the orbital frame (a mode sequence: its modes' targets differ; see `mode`)"
+                 if ctrl["law"] == "modes" else "attitude relative to the orbital frame")
         labels = LVLH_LABELS
         definition = LVLH_DEFINITION + ("; of the error to target_q, in the target's axes" if offset else "")
         qe = qt.normalize(qe)
