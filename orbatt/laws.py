@@ -212,7 +212,7 @@ PD = Law(
             "rate limit of an eigenaxis slew (Wie, Weiss & Arapostathis 1989): the commanded rate -(kp/kd) e is "
             "scaled to at most max_rate, max_torque acting as the acceleration limit; needs kd > 0",
             unit="rad / s", range=(1e-9, 10.0), sign="positive"),
-     LawKey("ki", "torque / time (N m / s)", "0", "integral gain on the attitude error (PID), with anti-windup "
+     LawKey("ki", "torque / time (N m / s)", "none", "integral gain on the attitude error (PID), with anti-windup "
             "(no integration on an axis while its command saturates)", unit="N m / s", range=(0.0, 1e6),
             sign="nonnegative"),
      LawKey("dump_gain", "rate (1/s)", "none (no dumping)",
@@ -351,7 +351,7 @@ def mode_key_docs():
     """The ``[[control.modes]]`` rows of the reference: a mode's conditions, then its law."""
     dims = {"name": "name", "until_time": "time", "until_rate": "angular rate", "until_settled": "angle",
             "hold": "time"}
-    docs = {k: (dims[k], "required" if k == "name" else ("0" if k == "hold" else "none"), meaning)
+    docs = {k: (dims[k], "required" if k == "name" else ("0 s" if k == "hold" else "none"), meaning)
             for k, (_, meaning) in MODE_KEYS.items()}
     docs["law"] = (" | ".join(repr(n) for n in LAWS if n != "modes"), "required",
                    "the mode's law, with that law's [control] keys (period excepted: the flight software's, in "

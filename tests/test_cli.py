@@ -21,7 +21,7 @@ SHORT = {  # t_end for a short CI run of each shipped scenario
     "cubesat-bdot-detumble": '"600 s"', "lvlh-hold-wheels": '"600 s"', "iss-tle-disturbances": '"600 s"',
     "cubesat-detumble-montecarlo": '"600 s"', "nadir-hold-montecarlo": '"600 s"',
     "didymos-dimorphos": '"1.5 d"', "sphere-ellipsoid-equilibrium": '"1 orbits"',
-    "didymos-dimorphos-montecarlo": '"1 d"',
+    "didymos-dimorphos-montecarlo": '"1 d"', "cubesat-slew-wheels": '"60 s"', "cubesat-mission-modes": '"600 s"',
 }
 
 

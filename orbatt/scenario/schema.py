@@ -204,7 +204,7 @@ independent_variable  text       'auto'                          DOP853's variab
                                                                  on a Keplerian orbit, no Kepler solve per stage:
                                                                  ~2x faster; else the time), 'eccentric-anomaly'
                                                                  or 'time' (orbatt 0.1's numbers)
-max_steps    plain integer       1e8                             most step attempts; giving it agrees to a run the
+max_steps    plain integer       1e8 (the bound)                 most step attempts; giving it agrees to a run the
                                                                  work estimate finds long (above 1e7 steps; else
                                                                  orbatt run --yes)
 
