@@ -26,9 +26,9 @@ from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
 from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, R0, R1, WHEELS, orbit_at,
-                    orbit_radial, terms_at)
+                    orbit_radial, terms_at, time_of_s)
 from .model import MOMENTUM_DUMP
-from .kepler import anomaly_of_time, time_of_anomaly
+from .kepler import anomaly_of_time
 from .qalg import qconj, qmul, qmul_pure, rotate_inv
 from .torques import gradient_of_torque
 
@@ -326,10 +326,8 @@ def next_tick(s, terms, params):
     none. The step loops land on it as on a breakpoint."""
     best = np.inf
     kind0 = terms[0, KIND]
-    t = s
-    if kind0 == ORBIT_KEPLER_ANOMALY:
-        orb = params[terms[0, P0]:terms[0, P1]]
-        t = time_of_anomaly(s, math.sin(s), orb)
+    orb = params[terms[0, P0]:terms[0, P1]]
+    t = time_of_s(s, terms, params)
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
         if not is_flight_software(kind):

@@ -137,6 +137,15 @@ N_CONSTANTS = 8
 
 
 @jit_inline
+def time_of_s(s, terms, params):
+    """The time at the step loops' independent variable ``s``: ``s`` itself, or the time of the
+    eccentric anomaly ``s`` for :data:`ORBIT_KEPLER_ANOMALY` (:func:`orbit_at`)."""
+    if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
+        return time_of_anomaly(s, math.sin(s), params[terms[0, P0]:terms[0, P1]])
+    return s
+
+
+@jit_inline
 def orbit_at(s, terms, params, table, work):
     """``(t, dt/ds, r, xhat, v)`` at the step loops' independent variable ``s``: the
     eccentric anomaly for :data:`ORBIT_KEPLER_ANOMALY` (:func:`orbatt.core.kepler.kepler_anomaly`),
@@ -164,10 +173,8 @@ def next_breakpoint(s, terms, params, table):
     and stays."""
     best = np.inf
     kind0 = terms[0, KIND]
-    t = s
-    if kind0 == ORBIT_KEPLER_ANOMALY:
-        orb = params[terms[0, P0]:terms[0, P1]]
-        t = time_of_anomaly(s, math.sin(s), orb)
+    orb = params[terms[0, P0]:terms[0, P1]]
+    t = time_of_s(s, terms, params)
     for j in range(terms.shape[0]):
         r0 = terms[j, R0]
         r1 = terms[j, R1]
