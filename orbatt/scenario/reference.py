@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from .schema import KEY_DOCS, REQUIRED_TABLES, TABLES, TOP_KEYS
 from .sweep_schema import PARAMETERS, SWEEP_KEY_DOCS, SWEEP_KEYS
+from ..sweep_outputs import outputs_markdown
 from .control_schema import WHEEL_KEYS
 from .ranges import range_text
 from .torques_schema import FACET_KEYS
@@ -86,6 +87,9 @@ def markdown() -> str:
     lines += ["## `[sweep]`", "", "Optional: many cases run by `orbatt sweep` (manual: `docs/sweeps.md`); "
               "`orbatt run` runs the nominal case.", ""]
     lines += _table((k, SWEEP_KEY_DOCS[k]) for k in SWEEP_KEYS) + [""]
+    lines += ["### `[sweep] outputs`", "", "Each output: what it needs of the scenario, the `[sweep]` keys it reads, "
+              "its variables along `case` (dimensions; units of a dimensional scenario) "
+              "(`orbatt.sweep_outputs.OUTPUTS`).", ""] + outputs_markdown() + [""]
     lines += ["### `[sweep.parameters]`", "", "| parameter | replaces | kind | limits | meaning |",
               "|---|---|---|---|---|"]
     for name, p in PARAMETERS.items():

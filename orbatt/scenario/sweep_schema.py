@@ -18,6 +18,7 @@ from ..dataset import DIMENSIONLESS_UNITS
 from ..units import INTERNAL_UNITS
 from .paths import ALIAS_PATHS, leaf_quantity, resolve, split_path
 from .study_schema import parse_study_keys
+from ..sweep_outputs import DEFAULT_OUTPUTS, OUTPUTS as SWEEP_OUTPUTS, THRESHOLDS, users_of
 from .fields import parse_int, parse_quantity
 from ..orbits import R_EARTH
 from .key_docs import parse_key_docs
@@ -43,16 +44,7 @@ parameters          table                   required                            
 samples             plain integer           required with random parameters                    number of random draws
 seed                plain integer           drawn and recorded                                 seed of the random draws (numpy PCG64)
 chunk_size          plain integer           automatic                                          cases per task
-outputs             list                    ['final_state', 'max_pointing_error', 'tumbling']  per-case outputs, of 'trajectory',
-                                                                                               'final_state', 'max_pointing_error',
-                                                                                               'tumbling', 'final_energy_error',
-                                                                                               'detumble_time', 'settling_time',
-                                                                                               'pointing_error', 'max_wheel_speed',
-                                                                                               'wheel_saturated',
-                                                                                               'max_control_torque', 'max_dipole';
-                                                                                               a binary asteroid's: 'final_state',
-                                                                                               'final_orbit', 'conservation',
-                                                                                               'max_libration' (all by default)
+outputs             list                    ['final_state', 'max_pointing_error', 'tumbling']  (below)
 pointing_axis       plain, 3 values         none: the whole attitude                           body axis whose pointing error is
                                                                                                measured (without it: the rotation angle
                                                                                                of the attitude from the reference)
@@ -61,17 +53,24 @@ tumbling_angle      angle                   90 deg                              
                                                                                                tumbles
 on_invalid          'error' | 'resample'    'error'                                            what to do with a draw outside the
                                                                                                physical limits
-detumble_rate       angular velocity        required with 'detumble_time'                      detumble_time: the earliest time after
-                                                                                               which |omega| stays below it
-settling_angle      angle                   required with 'settling_time'                      settling_time: the earliest time after
-                                                                                               which the pointing error stays below it
+detumble_rate       angular velocity        (below)                                            the earliest time after which |omega|
+                                                                                               stays below it
+settling_angle      angle                   (below)                                            the earliest time after which the
+                                                                                               pointing error stays below it
 window              time                    the last orbit, else the last 10 % of the run      span before t_end that
                                                                                                pointing_error_max/_rms summarize
 """)["sweep"]
-#: outputs that may be asked for
-OUTPUTS = ("trajectory", "final_state", "max_pointing_error", "tumbling", "final_energy_error", "detumble_time",
-           "settling_time", "pointing_error", "max_wheel_speed", "wheel_saturated", "max_control_torque", "max_dipole")
-DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
+#: outputs that may be asked for: their descriptors (:data:`orbatt.sweep_outputs.OUTPUTS`)
+OUTPUTS = tuple(SWEEP_OUTPUTS)
+SWEEP_KEY_DOCS["outputs"] = SWEEP_KEY_DOCS["outputs"][:2] + (
+    "per-case outputs, of " + ", ".join(f"'{k}'" for k in OUTPUTS) + " (each in the outputs table below); a binary "
+    "asteroid's: 'final_state', 'final_orbit', 'conservation', 'max_libration' (all by default)",)
+for _key in THRESHOLDS:  # what each threshold measures, and the outputs that read it
+    _d, _default, _meaning = SWEEP_KEY_DOCS[_key]
+    _users = " or ".join(f"'{o}'" for o in users_of(_key))
+    SWEEP_KEY_DOCS[_key] = (_d, f"required with {_users}" if THRESHOLDS[_key].required else _default,
+                            f"{_users}: {_meaning}")
+del _key, _d, _default, _meaning, _users
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
 DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "normal": ("mean", "std"), "truncnormal": ("mean", "std", "low", "high")}
 MAX_CASES = 100_000_000
@@ -587,9 +586,10 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         if not 0 < spec.tumbling_angle <= math.pi:
             raise ctx.error("[sweep] tumbling_angle", f"{table['tumbling_angle']!r} is outside (0, 180] deg")
     for k in ("pointing_axis", "pointing_reference"):
-        if k in table and not {"max_pointing_error", "tumbling", "settling_time", "pointing_error"} & set(spec.outputs):
-            raise ctx.error(f"[sweep] {k}", "only used with 'max_pointing_error', 'tumbling', 'settling_time' or "
-                                            "'pointing_error' in outputs")
+        users = users_of(k)
+        if k in table and not set(users) & set(spec.outputs):
+            raise ctx.error(f"[sweep] {k}", "only used with " + ", ".join(f"'{o}'" for o in users[:-1])
+                            + f" or '{users[-1]}' in outputs")
     parse_study_keys(ctx, table, spec, dimensionless=dimensionless, control=control, wheels=wheels)
     if "on_invalid" in table:
         if table["on_invalid"] not in ("error", "resample"):

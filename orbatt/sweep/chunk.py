@@ -36,7 +36,7 @@ from .case_groups import path_groups
 from .binary_chunk import compute_binary_chunk
 from .case_coords import parameter_coordinates
 from .stats import add_stats
-from .study import STUDY_OUTPUTS, study_outputs, target_pointing_error
+from ..sweep_outputs import OUTPUTS, study_outputs, target_pointing_error, variable_shape
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
 from ..orbits.base import as_times
@@ -299,12 +299,12 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
     res = {name: np.empty((n, 4)) for name in ("q_initial", "Q_initial", "q_final", "Q_final")}
     res.update(inertia=inertia, failed=np.zeros(n, dtype=bool), pointing_error=np.full(n, np.nan),
                energy_error=np.full(n, np.nan))
-    study = [o for o in STUDY_OUTPUTS if o in outs]
-    nw = len(sc.body.wheels)
-    for o in study:
-        for name in STUDY_OUTPUTS[o]:
-            res[name] = np.full((n, nw), np.nan) if o == "max_wheel_speed" else (
-                np.full((n, nw), -1, dtype=np.int8) if o == "wheel_saturated" else np.full(n, np.nan))
+    study = [OUTPUTS[o] for o in spec.outputs if OUTPUTS[o].compute is not None]
+    sizes = _sizes(sc)
+    for o in study:  # NaN until computed (-1 for a flag: failed)
+        for var in o.variables:
+            shape = (n,) + variable_shape(var, sizes)
+            res[var.name] = np.full(shape, -1, dtype=np.int8) if var.kind == "flag" else np.full(shape, np.nan)
     stats = {}
     pieces = []
     for group_sc, idx, bodies, q0, Q0 in _groups(sc, spec, values, axis, inertia, n, all_bodies if vary_inertia
@@ -344,6 +344,11 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
             on_cases(int(idx.size))
 
     return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
+
+
+def _sizes(sc):
+    """``{dim: length}`` of the dimensions the study outputs' variables have beyond ``case``."""
+    return {"wheel": len(sc.body.wheels), "axis": 3}
 
 
 class _Group:
@@ -462,41 +467,24 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
 
 
 def _study_variables(sc, spec, UN, res, coords):
-    """The Dataset variables of the study outputs in ``res`` (SI; adds the ``wheel``
-    coordinate to ``coords`` when a wheel output is there)."""
-    outs = set(spec.outputs)
+    """The Dataset variables of the study outputs in ``res`` (their descriptors,
+    :data:`orbatt.sweep_outputs.OUTPUTS`; SI), with the coordinates of their dimensions
+    (``wheel``) added to ``coords``."""
+    dimless = sc.spec.dimensionless
     data = {}
-    if "detumble_time" in outs:
-        data["detumble_time"] = cf_variable(("case",), res["detumble_time"], UN["time"],
-                                            "time after which |omega| stays below detumble_rate (NaN: never)",
-                                            detumble_rate=spec.detumble_rate, located="cubic through 4 outputs")
-    if "settling_time" in outs:
-        data["settling_time"] = cf_variable(("case",), res["settling_time"], UN["time"],
-                                            "time after which the pointing error stays below settling_angle (NaN: "
-                                            "never)", settling_angle_rad=spec.settling_angle,
-                                            located="cubic through 4 outputs")
-    if "pointing_error" in outs:
-        what = "over the last orbit, else the last 10 % of the run" if spec.window is None else \
-            f"over the last {spec.window:g} {UN['time']} of the run"
-        data["pointing_error_max"] = cf_variable(("case",), res["pointing_error_max"], "rad",
-                                                 f"largest pointing error {what}")
-        data["pointing_error_rms"] = cf_variable(("case",), res["pointing_error_rms"], "rad",
-                                                 f"root mean square pointing error {what} (output times)")
-    if {"max_wheel_speed", "wheel_saturated"} & outs:
-        coords["wheel"] = cf_variable(("wheel",), np.arange(len(sc.body.wheels)), "1", "reaction wheel index")
-    if "max_wheel_speed" in outs:
-        data["max_wheel_speed"] = cf_variable(("case", "wheel"), res["max_wheel_speed"], UN["rate"],
-                                              "largest |speed| of each wheel relative to the body (output times)")
-    if "wheel_saturated" in outs:
-        data["wheel_saturated"] = cf_variable(("case", "wheel"), res["wheel_saturated"], "1",
-                                              "a wheel reached max_speed or max_torque", flag_values=np.array(
-                                                  [-1, 0, 1], dtype=np.int8), flag_meanings="failed free saturated")
-    if "max_control_torque" in outs:
-        data["max_control_torque"] = cf_variable(("case",), from_kernel(res["max_control_torque"], "torque"), "N m",
-                                                 "largest |torque| the control applied (output times)")
-    if "max_dipole" in outs:
-        data["max_dipole"] = cf_variable(("case",), from_kernel(res["max_dipole"], "dipole"), "A m^2",
-                                         "largest |B-dot dipole| (output times)")
+    for key in spec.outputs:
+        o = OUTPUTS[key]
+        if o.compute is None:
+            continue
+        for var in o.variables:
+            name = var.long_name if isinstance(var.long_name, str) else var.long_name(spec, UN)
+            extra = dict(var.attrs(spec))
+            if var.kind == "flag":
+                extra.update(flag_values=np.array([-1, 0, 1], dtype=np.int8), flag_meanings="failed " + var.flags)
+            data[var.name] = cf_variable(("case",) + var.dims, var.written(res[var.name], dimless), var.unit(UN), name,
+                                         **extra)
+            if "wheel" in var.dims and "wheel" not in coords:
+                coords["wheel"] = cf_variable(("wheel",), np.arange(len(sc.body.wheels)), "1", "reaction wheel index")
     return data
 
 

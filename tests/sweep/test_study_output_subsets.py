@@ -20,7 +20,7 @@ import pytest
 from orbatt.scenario import Scenario, ScenarioError, parse
 from orbatt.scenario.sweep_schema import OUTPUTS
 from orbatt.sweep import Sweep
-from orbatt.sweep.study import STUDY_OUTPUTS
+from orbatt.sweep_outputs import OUTPUTS as SWEEP_OUTPUTS
 
 SCEN = Path(__file__).resolve().parents[2] / "scenarios"
 pytestmark = pytest.mark.filterwarnings("ignore::orbatt.orbits.base.PeriapsisWarning")
@@ -39,16 +39,14 @@ SCENARIOS = {
     "torque-free": (_short("paper-torque-free", "1"), "inertia1 = { values = [1.25, 1.3] }",
                     {"detumble_time": "detumble_rate = 1.0", "settling_time": 'settling_angle = "25 deg"'}),
 }
-#: the variables each output writes
-VARIABLES = {"trajectory": ("q", "Q"), "final_state": ("q_initial", "Q_initial", "q_final", "Q_final"),
-             "max_pointing_error": ("max_pointing_error",), "tumbling": ("tumbling",),
-             "final_energy_error": ("final_energy_error",), **STUDY_OUTPUTS}
+#: the variables each output writes (its descriptor's)
+VARIABLES = {k: o.names for k, o in SWEEP_OUTPUTS.items()}
 
 
 def _text(name, outs):
     base, parameter, keys = SCENARIOS[name]
     table = "\n[sweep]\noutputs = [" + ", ".join(f'"{o}"' for o in outs) + "]\n"
-    table += "".join(keys[o] + "\n" for o in outs if o in keys)
+    table += "".join(dict.fromkeys(keys[o] + "\n" for o in outs if o in keys))
     return base + table + "[sweep.parameters]\n" + parameter + "\n"
 
 

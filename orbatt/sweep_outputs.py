@@ -1,0 +1,492 @@
+"""The per-case outputs of a sweep (``[sweep] outputs``, ``docs/sweeps.md``: Outputs), each
+**one descriptor** (issue 32 item 1), as :mod:`orbatt.laws` is for a control law: its key, what
+it needs of the scenario, the ``[sweep]`` keys it reads (thresholds), its Dataset variables
+(dimensions beyond ``case``, unit kind, long name, attributes) and, for a study output, its
+compute function. The schema's checks (:mod:`orbatt.scenario.study_schema`), the reference
+(``docs/scenarios.md``, :func:`outputs_markdown`), the chunk's storage and Dataset
+(:mod:`orbatt.sweep.chunk`) are generated from :data:`OUTPUTS`.
+
+A new output is one :class:`SweepOutput` here (with a compute function, and a :data:`NEEDS`
+or :data:`THRESHOLDS` entry if it brings a new one) plus its tests.
+
+Study outputs (issue 23) are computed per case from that case's own outputs (no reduction
+across cases, so a case's numbers do not depend on the cases sharing its chunk). Times where
+a quantity falls through a threshold are located between the output times, on the cubic
+through the four outputs around the crossing (:func:`crossing_time`) and then on the
+continuous solution (:func:`refine_crossing`), not rounded to the output grid; the body rate,
+the control torque, the dipole and the wheels' speeds come from the kernel the integration
+used (:func:`orbatt.core.gyrostat.evaluate_extended`). Internal units in, SI out where the
+Dataset says so. The outputs computed over a whole group of cases (the trajectory, the states,
+the pointing error and tumbling, the energy) have no compute function here: their variables
+are written by :func:`orbatt.sweep.chunk.chunk_dataset`.
+
+This module sits outside :mod:`orbatt.sweep` so that the schema (:mod:`orbatt.scenario`)
+reads it without importing the sweep package (data flows scenario -> sweep).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Callable
+
+import numpy as np
+
+from . import canonical as cn
+from . import quaternion as qt
+from . import units as U
+from .core import kernel_floats
+from .core import gyrostat as kg
+from .core import potentials as kp
+from .laws import LAWS, law_of
+from .methods.problem import kernel_spec
+from .units import from_kernel, to_output
+
+__all__ = ["OutputVar", "Threshold", "SweepOutput", "OUTPUTS", "DEFAULT_OUTPUTS", "NEEDS", "THRESHOLDS", "Case",
+           "crossing_time", "refine_crossing", "window_start", "study_series", "target_pointing_error",
+           "study_outputs", "variable_shape", "outputs_markdown", "users_of"]
+
+
+@dataclass(frozen=True)
+class OutputVar:
+    """One Dataset variable of an output: ``("case",) + dims``; ``kind`` the quantity
+    (a key of :data:`orbatt.units.DIMENSIONAL_UNITS`, written with
+    :func:`orbatt.units.to_output`; ``"torque"``/``"dipole"``: a kernel quantity written in SI by
+    :func:`orbatt.units.from_kernel`; ``"flag"``: int8 -1 failed, 0 / 1 with ``flags`` the meanings
+    of 0 and 1); ``long_name`` a text or ``long_name(spec, units) -> str``; ``attrs(spec) ->
+    dict`` more CF attributes."""
+
+    name: str
+    dims: tuple
+    kind: str
+    long_name: object
+    attrs: Callable = lambda spec: {}
+    flags: str = ""
+
+    def unit(self, units):
+        return {"torque": "N m", "dipole": "A m^2", "flag": "1"}.get(self.kind) or units[self.kind]
+
+    def written(self, values, dimensionless):
+        """The values as the Dataset holds them (from the internal units of the results)."""
+        if self.kind in ("torque", "dipole"):
+            return from_kernel(values, self.kind)
+        if self.kind == "flag":
+            return values
+        return to_output(values, self.kind, dimensionless)
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """A ``[sweep]`` key an output reads: its unit (:mod:`orbatt.units`), whether plain numbers
+    are read as radians whatever the scenario (``angle``), the admitted interval ``(low, high]``
+    and the message of a value outside it; ``required``: the outputs that read it need it."""
+
+    unit: object
+    angle: bool = False
+    high: float = math.inf
+    outside: str = "must be positive"
+    required: bool = True
+
+
+#: the [sweep] keys outputs read (SweepSpec has an attribute of each name), internal units
+THRESHOLDS = {
+    "detumble_rate": Threshold(U.RATE),
+    "settling_angle": Threshold(U.ANGLE, angle=True, high=math.pi, outside="is outside (0, 180] deg"),
+    "window": Threshold(U.TIME, required=False),
+}
+
+
+def _dipole_laws():
+    return " or ".join(f"{x.title}, law = {x.name!r}" for x in LAWS.values() if x.writes("dipole_control"))
+
+
+#: what an output may need of the scenario: ``need -> (test(control, wheels) -> bool, phrase)``;
+#: ``control`` the [control] settings (or None), ``wheels`` the number of reaction wheels
+NEEDS = {
+    "wheels": (lambda control, wheels: wheels > 0, "reaction wheels ([[body.wheels]])"),
+    "control": (lambda control, wheels: control is not None, "a [control] law"),
+    "dipole": (lambda control, wheels: control is not None and law_of(control).writes("dipole_control"),
+               f"a [control] law with magnetorquers ({_dipole_laws()})"),
+}
+
+
+@dataclass(frozen=True)
+class SweepOutput:
+    """One ``[sweep] outputs`` name (module docstring).
+
+    Attributes
+    ----------
+    key : str
+    meaning : str
+        One line for the reference.
+    variables : tuple of OutputVar
+    needs : tuple of str
+        Keys of :data:`NEEDS`.
+    keys : tuple of str
+        The ``[sweep]`` keys it reads: its thresholds (:data:`THRESHOLDS`, read and checked by
+        :mod:`orbatt.scenario.study_schema`) and the pointing keys (``pointing_axis``,
+        ``pointing_reference``, ``tumbling_angle``: :mod:`orbatt.scenario.sweep_schema`).
+    compute : callable or None
+        ``compute(case) -> {variable: value}`` of one :class:`Case` (internal units); None:
+        computed over the group by :mod:`orbatt.sweep.chunk`.
+    refuse : callable
+        ``refuse(control) -> str or None``: why a scenario that has its needs still cannot.
+    """
+
+    key: str
+    meaning: str
+    variables: tuple
+    needs: tuple = ()
+    keys: tuple = ()
+    compute: Callable | None = None
+    refuse: Callable = lambda control: None
+
+    @property
+    def names(self):
+        return tuple(v.name for v in self.variables)
+
+
+def variable_shape(var, sizes):
+    """The shape of a variable's values per case: ``sizes`` (``{dim: length}``) of its dims."""
+    return tuple(sizes[d] for d in var.dims)
+
+
+def users_of(key):
+    """The outputs that read the ``[sweep]`` key ``key``."""
+    return tuple(o.key for o in OUTPUTS.values() if key in o.keys)
+
+#: a saturation limit counts as reached within this relative margin (the law clips to the limit)
+SATURATION_MARGIN = 1e-9
+
+
+def crossing_time(t, x, level):
+    """The earliest time after which ``x`` stays below ``level`` until the end.
+
+    Parameters
+    ----------
+    t : ndarray (N,)
+        Output times, increasing.
+    x : ndarray (N,)
+        The quantity at the outputs.
+    level : float
+
+    Returns
+    -------
+    float
+        ``t[0]`` when ``x`` is below ``level`` at every output; NaN when it is not below at the
+        last output (or a value is NaN); otherwise the root in ``(t[k], t[k+1]]`` (``k`` the last
+        output at or above ``level``) of the cubic through the four outputs around it (two
+        when the run has fewer), found by bisection to the last bit.
+    """
+    n = t.size
+    if n == 0 or not np.all(np.isfinite(x)) or x[-1] >= level:
+        return math.nan
+    above = np.flatnonzero(x >= level)
+    if above.size == 0:
+        return float(t[0])
+    k = int(above[-1])
+    j0 = min(max(k - 1, 0), max(n - 4, 0))
+    pts = np.arange(j0, min(j0 + 4, n))
+    tk, xk = t[pts], x[pts] - level
+
+    def f(s):  # Lagrange form: exact at the outputs
+        total = 0.0
+        for i in range(pts.size):
+            w = 1.0
+            for j in range(pts.size):
+                if j != i:
+                    w *= (s - tk[j]) / (tk[i] - tk[j])
+            total += xk[i] * w
+        return total
+
+    lo, hi = float(t[k]), float(t[k + 1])  # f(lo) >= 0 > f(hi)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid <= lo or mid >= hi:
+            break
+        if f(mid) >= 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+#: outputs of the re-integration over the output interval of a crossing (:func:`refine_crossing`)
+REFINE_POINTS = 65
+
+
+def refine_crossing(sc, potential, body, t, k, q, Q, h, quantity, level):
+    """The crossing of ``level`` in ``(t[k], t[k+1]]`` located on the continuous solution: the
+    case integrated again from its output ``k`` to ``k + 1`` (the same method and tolerances)
+    with :data:`REFINE_POINTS` outputs, and :func:`crossing_time` on those.
+
+    ``quantity(omega, q, t) -> (n,)`` gives the quantity from the body rate and the attitude at
+    the fine outputs ``t``. Returns None where the interval cannot be integrated again (the coarse
+    estimate then stands): a wheel at its speed limit, a failed re-integration, or a fine run
+    that does not end below ``level``.
+    """
+    from .control import ReactionWheel
+    from .body import RigidBody
+    from .propagation import propagate
+    from .state import State
+    from .errors import OrbattError
+    from astropy import units as u
+
+    tf = np.linspace(float(t[k]), float(t[k + 1]), REFINE_POINTS)
+    period = getattr(getattr(potential, "control", None), "period", None)
+    if period is not None and float(t[k]) % period != 0.0:
+        # a flight software holds a command issued before t[k]: a run from t[k] would issue
+        # another (on a tick it issues the same one, and the fine run is the case's own)
+        return None
+    try:
+        b = body
+        if body.wheels:  # the wheels at their speeds of output k (relative to the body)
+            omega_k = study_series(potential, body, body.inertia_value, t[k:k + 1], q[k:k + 1], Q[k:k + 1],
+                                   h[k:k + 1])[0][0]
+            wheels = []
+            for j, wh in enumerate(body.wheels):
+                speed = h[k, j] / wh.inertia - float(np.dot(wh.axis, omega_k))
+                wheels.append(ReactionWheel(wh.axis, wh.inertia_kg_m2 * u.kg * u.m**2, speed * u.rad / u.s,
+                                            max_torque=None if wh.max_torque_n_m is None else wh.max_torque_n_m * u.N * u.m,
+                                            max_speed=None if wh.max_speed_rad_s is None
+                                            else wh.max_speed_rad_s * u.rad / u.s))
+            b = RigidBody(from_kernel(body.inertia_value, "inertia") * u.kg * u.m**2, wheels=wheels)
+        tr = propagate(b, State(b, q[k], Q[k]), potential, tf, method=sc.method, **sc.settings)
+    except (OrbattError, ValueError):
+        return None
+    hf = None if tr.extended is None else np.ascontiguousarray(tr.extended)
+    omega = study_series(potential, b, b.inertia_value, tf, np.ascontiguousarray(tr.q), np.ascontiguousarray(tr.Q),
+                         hf)[0]
+    x = quantity(omega, np.ascontiguousarray(tr.q), tf)
+    if not x[-1] < level:
+        return None
+    return crossing_time(tf, x, level)
+
+
+def window_start(sc, window=None):
+    """The start (s) of the window the pointing error is summarized over: ``t_end - window``
+    (``window`` in s), else the last orbit, else the last 10 % of the run."""
+    t0, t1 = float(sc.times[0]), float(sc.times[-1])
+    if window is None:
+        period = getattr(sc.orbit, "period_value", None) if sc.orbit is not None else None
+        window = period if period is not None and period < t1 - t0 else 0.1 * (t1 - t0)
+    return max(t0, t1 - window)
+
+
+def study_series(potential, body, inertia, t, q, Q, h):
+    """``(omega, tau, m, u)`` of one case along its outputs: body rate (rad/s), control torque
+    and B-dot dipole (internal units, body axes) and the wheels' motor torques, from the kernel
+    the integration used; the rigid body's ``omega = I^-1 g`` and zeros without wheels or
+    control."""
+    control = getattr(potential, "control", None)
+    if control is None and not body.wheels:
+        omega = cn.body_rate(q, Q, inertia)
+        z = np.zeros_like(omega)
+        return omega, z, z, np.zeros((t.size, 0))
+    model = kernel_spec(potential, [body])
+    Y = np.ascontiguousarray(np.concatenate([q, Q, np.zeros((t.size, 0)) if h is None else h], axis=1))
+    omega, _, tau, m, u = kg.evaluate_extended(kernel_floats(t), Y, kernel_floats(inertia), *model,
+                                               kp.new_work())
+    return omega, tau, m, u
+
+
+def target_pointing_error(control, q, p):
+    """Angle (rad) between the attitudes ``q (N, 4)`` and a PD law's target: the orbital frame
+    ``p (N, 4)`` (times ``target_q`` when given) or the inertial ``target_q``."""
+    if control.target == "orbital":
+        qt_ = p if control.target_q is None else qt.mul(p, control.target_q)
+    else:
+        qt_ = np.broadcast_to(control.target_q, q.shape)
+    e = qt.mul(qt.conj(qt_), q)
+    v = np.sqrt(e[..., 1] * e[..., 1] + e[..., 2] * e[..., 2] + e[..., 3] * e[..., 3])
+    return 2.0 * np.arctan2(v, np.abs(e[..., 0]))
+
+
+class Case:
+    """What the compute functions of :data:`OUTPUTS` read of one case: its scenario ``sc``
+    (output times, orbit), ``spec`` (the [sweep] table), ``potential`` (with its control law),
+    ``body`` (with its wheels), ``inertia (3,)``, ``q, Q (N, 4)``, ``h (N, k)`` or None (the
+    wheels' momenta, then the flight software's held commands) and ``pointing(t, q) -> (n,)``
+    (the pointing error, rad, that the settling time and the window use); the kernel's series
+    computed once, when first read."""
+
+    def __init__(self, sc, spec, potential, body, inertia, q, Q, h, pointing):
+        self.sc, self.spec, self.potential, self.body, self.inertia = sc, spec, potential, body, inertia
+        self.t, self.q, self.Q, self.h, self.pointing = sc.times, q, Q, h, pointing
+
+    @cached_property
+    def series(self):
+        """``(omega, tau, m, u)``: :func:`study_series`."""
+        return study_series(self.potential, self.body, self.inertia, self.t, self.q, self.Q, self.h)
+
+    @property
+    def omega(self):
+        return self.series[0]
+
+    @cached_property
+    def pointing_error(self):
+        return self.pointing(self.t, self.q)
+
+    @cached_property
+    def wheel_speed(self):
+        """``(N, n)`` each wheel's speed relative to the body, rad/s."""
+        wheels, omega, t, h = self.body.wheels, self.omega, self.t, self.h
+        iw = np.array([wh.inertia for wh in wheels])
+        axes = np.array([wh.axis for wh in wheels])
+        speed = np.zeros((t.size, len(wheels)))
+        for k in range(len(wheels)):  # h_k / Iw_k - a_k . omega, written out (no BLAS)
+            a = axes[k]
+            speed[:, k] = h[:, k] / iw[k] - (omega[:, 0] * a[0] + omega[:, 1] * a[1] + omega[:, 2] * a[2])
+        return speed
+
+    def located(self, x, level, quantity):
+        """:func:`crossing_time` of ``x``, located on the continuous solution where it falls
+        between two outputs (:func:`refine_crossing`; the cubic through the outputs where that
+        cannot be done)."""
+        t = self.t
+        coarse = crossing_time(t, x, level)
+        if not math.isfinite(coarse) or coarse == t[0]:
+            return coarse
+        k = int(np.flatnonzero(x >= level)[-1])
+        fine = refine_crossing(self.sc, self.potential, self.body, t, k, self.q, self.Q, self.h, quantity, level)
+        return coarse if fine is None else fine
+
+
+def _rate(omega):
+    """``|omega|`` per row, written out."""
+    return np.sqrt(omega[:, 0] * omega[:, 0] + omega[:, 1] * omega[:, 1] + omega[:, 2] * omega[:, 2])
+
+
+def _detumble_time(c):
+    return {"detumble_time": c.located(_rate(c.omega), c.spec.detumble_rate, lambda w, qf, tf: _rate(w))}
+
+
+def _settling(c):
+    """The earliest time after which the pointing error stays below ``settling_angle``."""
+    return c.located(c.pointing_error, c.spec.settling_angle, lambda w, qf, tf: c.pointing(tf, qf))
+
+
+def _pointing_error(c):
+    w = c.pointing_error[c.t >= window_start(c.sc, c.spec.window)]
+    return {"pointing_error_max": float(np.max(w)) if w.size else math.nan,
+            "pointing_error_rms": float(np.sqrt(np.sum(w * w) / w.size)) if w.size else math.nan}
+
+
+def _max_wheel_speed(c):
+    t = c.t
+    return {"max_wheel_speed": np.max(np.abs(c.wheel_speed), axis=0) if t.size else np.full(len(c.body.wheels), np.nan)}
+
+
+def _wheel_saturated(c):
+    top = _max_wheel_speed(c)["max_wheel_speed"]
+    u = c.series[3]
+    sat = np.zeros(len(c.body.wheels), dtype=bool)
+    for k, wh in enumerate(c.body.wheels):
+        if wh.max_speed_rad_s is not None:
+            sat[k] |= top[k] >= wh.max_speed_rad_s * (1.0 - SATURATION_MARGIN)
+        if wh.max_torque_n_m is not None and u.shape[1]:
+            sat[k] |= from_kernel(np.max(np.abs(u[:, k])), "torque") >= wh.max_torque_n_m * (1.0 - SATURATION_MARGIN)
+    return {"wheel_saturated": sat}
+
+
+def _max_norm(v):
+    return float(np.max(np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])))
+
+
+_LOCATED = "cubic through 4 outputs"
+
+
+def _window_text(spec, units):
+    return "over the last orbit, else the last 10 % of the run" if spec.window is None else \
+        f"over the last {spec.window:g} {units['time']} of the run"
+
+
+def _not_sun(output):
+    def refuse(control):
+        law = law_of(control)
+        if law is not None and "sun" in law.fields(control):
+            return (f"{output!r} of a Sun-pointing law is not available yet; use pointing_axis / pointing_reference "
+                    "without the law, or remove it")
+        return None
+    return refuse
+
+
+#: every output that may be asked for, in the order the Dataset and the reference list them
+OUTPUTS = {o.key: o for o in (
+    SweepOutput("trajectory", "every case's whole trajectory (as `orbatt run` writes it), along case",
+                (OutputVar("q", ("time", "quat"), "one", "attitude quaternion"),
+                 OutputVar("Q", ("time", "quat"), "momentum", "conjugate momentum"))),
+    SweepOutput("final_state", "the initial and final attitude and conjugate momentum",
+                (OutputVar("q_initial", ("quat",), "one", "initial attitude quaternion"),
+                 OutputVar("Q_initial", ("quat",), "momentum", "initial conjugate momentum"),
+                 OutputVar("q_final", ("quat",), "one", "final attitude quaternion"),
+                 OutputVar("Q_final", ("quat",), "momentum", "final conjugate momentum"))),
+    SweepOutput("max_pointing_error", "largest pointing error over the output times (pointing_axis, "
+                                      "pointing_reference)",
+                (OutputVar("max_pointing_error", (), "angle", "maximum pointing error over the output times"),),
+                keys=("pointing_axis", "pointing_reference")),
+    SweepOutput("tumbling", "1 where max_pointing_error exceeds tumbling_angle",
+                (OutputVar("tumbling", (), "flag", "tumbling flag"),),
+                keys=("tumbling_angle", "pointing_axis", "pointing_reference")),
+    SweepOutput("final_energy_error", "relative change of the conserved energy (no [torques] or [control])",
+                (OutputVar("final_energy_error", (), "one", "relative change of the conserved energy"),)),
+    SweepOutput("detumble_time", "time after which |omega| stays below detumble_rate",
+                (OutputVar("detumble_time", (), "time", "time after which |omega| stays below detumble_rate "
+                                                           "(NaN: never)",
+                           lambda spec: dict(detumble_rate=spec.detumble_rate, located=_LOCATED)),),
+                keys=("detumble_rate",), compute=_detumble_time),
+    SweepOutput("settling_time", "time after which the pointing error (to the law's target, else pointing_axis / "
+                                 "pointing_reference) stays below settling_angle",
+                (OutputVar("settling_time", (), "time", "time after which the pointing error stays below "
+                                                           "settling_angle (NaN: never)",
+                           lambda spec: dict(settling_angle_rad=spec.settling_angle, located=_LOCATED)),),
+                keys=("settling_angle", "pointing_axis", "pointing_reference"),
+                compute=lambda c: {"settling_time": _settling(c)},
+                refuse=_not_sun("settling_time")),
+    SweepOutput("pointing_error", "largest and root mean square pointing error over window",
+                (OutputVar("pointing_error_max", (), "angle",
+                           lambda spec, units: f"largest pointing error {_window_text(spec, units)}"),
+                 OutputVar("pointing_error_rms", (), "angle", lambda spec, units: "root mean square pointing error "
+                           f"{_window_text(spec, units)} (output times)")),
+                keys=("window", "pointing_axis", "pointing_reference"), compute=_pointing_error),
+    SweepOutput("max_wheel_speed", "largest |speed| of each wheel relative to the body",
+                (OutputVar("max_wheel_speed", ("wheel",), "rate",
+                           "largest |speed| of each wheel relative to the body (output times)"),),
+                needs=("wheels",), compute=_max_wheel_speed),
+    SweepOutput("wheel_saturated", "1 where a wheel reached max_speed or max_torque",
+                (OutputVar("wheel_saturated", ("wheel",), "flag", "a wheel reached max_speed or max_torque",
+                           flags="free saturated"),),
+                needs=("wheels",), compute=_wheel_saturated),
+    SweepOutput("max_control_torque", "largest |torque| the control applied",
+                (OutputVar("max_control_torque", (), "torque", "largest |torque| the control applied (output times)"),),
+                needs=("control",), compute=lambda c: {"max_control_torque": _max_norm(c.series[1])}),
+    SweepOutput("max_dipole", "largest |dipole| of the magnetorquers",
+                (OutputVar("max_dipole", (), "dipole", "largest |B-dot dipole| (output times)"),),
+                needs=("dipole",), compute=lambda c: {"max_dipole": _max_norm(c.series[2])}),
+)}
+DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
+
+
+def study_outputs(sc, spec, potential, body, inertia, q, Q, h, pointing):
+    """The study outputs of one case among ``spec.outputs`` (those with a compute function),
+    internal units: ``{variable: value}``, exactly the variables of the outputs asked
+    (:class:`Case` for the arguments)."""
+    c = Case(sc, spec, potential, body, inertia, q, Q, h, pointing)
+    out = {}
+    for key in spec.outputs:
+        o = OUTPUTS[key]
+        if o.compute is not None:
+            out.update(o.compute(c))
+    return out
+
+
+def outputs_markdown():
+    """The reference's table of the outputs (``docs/scenarios.md``)."""
+    rows = ["| output | needs | reads | variables | meaning |", "|---|---|---|---|---|"]
+    for o in OUTPUTS.values():
+        needs = "; ".join(NEEDS[n][1] for n in o.needs)
+        keys = ", ".join(f"`{k}`" for k in o.keys)
+        var = ", ".join(f"`{v.name}` ({', '.join(('case',) + v.dims)}; {v.unit(U.DIMENSIONAL_UNITS)})"
+                        for v in o.variables)
+        rows.append(f"| `{o.key}` | {needs} | {keys} | {var} | {o.meaning.replace('|', chr(92) + '|')} |")
+    return rows
