@@ -107,6 +107,8 @@ NEEDS = {
     "control": (lambda control, wheels: control is not None, "a [control] law"),
     "dipole": (lambda control, wheels: control is not None and law_of(control).writes("dipole_control"),
                f"a [control] law with magnetorquers ({_dipole_laws()})"),
+    "target": (lambda control, wheels: control is not None and law_of(control).holds_frame(control),
+               "a [control] law holding a target (law = 'pd', target = 'orbital' or 'inertial')"),
 }
 
 
@@ -463,6 +465,12 @@ OUTPUTS = {o.key: o for o in (
     SweepOutput("max_dipole", "largest |dipole| of the magnetorquers",
                 (OutputVar("max_dipole", (), "dipole", "largest |B-dot dipole| (output times)"),),
                 needs=("dipole",), compute=lambda c: {"max_dipole": _max_norm(c.series[2])}),
+    SweepOutput("slew_time", "time after which the attitude error to the law's target stays below settling_angle "
+                             "(settling_time's computation, the law's target only)",
+                (OutputVar("slew_time", (), "time", "time after which the attitude error to the control law's "
+                                                       "target stays below settling_angle (NaN: never)",
+                           lambda spec: dict(settling_angle_rad=spec.settling_angle, located=_LOCATED)),),
+                needs=("target",), keys=("settling_angle",), compute=lambda c: {"slew_time": _settling(c)}),
 )}
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 

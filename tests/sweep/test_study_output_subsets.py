@@ -39,6 +39,8 @@ SCENARIOS = {
     "torque-free": (_short("paper-torque-free", "1"), "inertia1 = { values = [1.25, 1.3] }",
                     {"detumble_time": "detumble_rate = 1.0", "settling_time": 'settling_angle = "25 deg"'}),
 }
+for _name, (_, _, _keys) in SCENARIOS.items():  # slew_time reads settling_time's threshold
+    _keys["slew_time"] = _keys["settling_time"]
 #: the variables each output writes (its descriptor's)
 VARIABLES = {k: o.names for k, o in SWEEP_OUTPUTS.items()}
 
