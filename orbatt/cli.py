@@ -18,6 +18,7 @@ naming the time; ``--debug`` shows the traceback instead.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
@@ -118,8 +119,8 @@ def _run(args, cold):
 
     sc = load_scenario(args.scenario, yes=args.yes)
     out = _output_path(args, sc)
-    stem = _plot_stem(args, sc)
     aem = _aem_path(args, sc, out)
+    stem = _plot_stem(args, sc, {"-o": out, "--aem": aem})
     t0 = time.perf_counter()
     progress = not args.quiet
     if cold is not None:  # the input is good: start compiling in the background, go on interpreted
@@ -204,16 +205,25 @@ def _output_path(args, sc, *, zarr=False):
     return check_output_path(out, what=what, zarr=zarr)
 
 
-def _plot_stem(args, sc):
+def _plot_stem(args, sc, outputs=None):
     """The stem of the ``--plot`` figure names (``NAME-pointing.png`` ...), checked before the
     run (:func:`orbatt.dataset.figure_files.check_figure_folder`, for every figure the run may
     draw): ``name`` a plain file name, ``--plot`` a writable folder (or a path to create in
-    one), and no link or foreign file where a figure goes."""
+    one), no link or foreign file where a figure goes, and no figure where the run's other
+    ``outputs`` (``{option: path or None}``: ``-o``, ``--aem``) go."""
     if not args.plot:
         return None
     from .dataset.figure_files import check_figure_folder
+    from .errors import InputError
 
-    check_figure_folder(args.plot, sc.name, what="--plot")
+    paths = check_figure_folder(args.plot, sc.name, what="--plot")
+    for option, path in (outputs or {}).items():
+        if path is None:
+            continue
+        for figure, fig in paths.items():
+            if os.path.abspath(fig) == os.path.abspath(path):
+                raise InputError(f"{option}: {str(path)!r} is also where --plot writes the {figure} figure; give "
+                                 f"{option} another name (or --plot another folder)")
     return sc.name
 
 
@@ -256,9 +266,15 @@ def _checked_aem(path, source=None):
 
 def _cmd_export(args):
     from .dataset import open_dataset, write_aem
+    from .errors import InputError
 
     src = _existing(args.file)
     aem = _checked_aem(args.aem, src)
+    if args.ref_frame is not None:
+        bad = next((c for c in args.ref_frame if ord(c) < 32 or 127 <= ord(c) < 160), None)
+        if bad is not None or not args.ref_frame.strip():
+            raise InputError(f"--ref-frame: {args.ref_frame!r} " + (f"holds the control character {bad!r}" if bad else
+                                                                     "is empty") + "; give a frame name such as ICRF")
     ds = open_dataset(src, load=True)
     options = {"attitude": args.attitude, "case": args.case, "time_system": args.time_system}
     if args.ref_frame:
@@ -286,8 +302,9 @@ def _cmd_sweep(args):
         print(f"orbatt sweep: [sweep] gives no seed; drew seed = {sw.seed} (recorded in the output as sweep_seed)",
               file=sys.stderr)
     try:
-        ds = run_sweep(sw, out, scheduler=args.scheduler, workers=args.workers, chunk_size=args.chunk_size,
-                       resume=args.resume, progress=report, worker_timeout=args.worker_timeout)
+        with _sweep_lock(out):
+            ds = run_sweep(sw, out, scheduler=args.scheduler, workers=args.workers, chunk_size=args.chunk_size,
+                           resume=args.resume, progress=report, worker_timeout=args.worker_timeout)
     except KeyboardInterrupt:
         if Path(f"{out}.parts").is_dir():
             print(f"\norbatt: interrupted; the finished chunks are in {out.name}.parts/: rerun with --resume to "
@@ -303,6 +320,38 @@ def _cmd_sweep(args):
         print(sweep_summary(ds, title=f"{sc.name} -> {out}", run=run))
     ds.close()
     return 0
+
+
+@contextlib.contextmanager
+def _sweep_lock(out):
+    """Hold ``.OUTPUT.lock`` beside the sweep's ``OUTPUT`` (an exclusive ``flock``, released when
+    the process ends however it ends) while the sweep computes, merges and removes
+    ``OUTPUT.parts/``: a second ``orbatt sweep`` of the same output (a concurrent ``--resume``)
+    is refused at once instead of racing for the parts."""
+    try:
+        import fcntl
+    except ImportError:  # no flock (Windows): unlocked, as before
+        yield
+        return
+    from .errors import InputError
+
+    lock = Path(out).parent / f".{Path(out).name}.lock"
+    fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise InputError(f"-o: another orbatt sweep is writing {str(out)!r} (and its {Path(out).name}.parts/) "
+                             "now; wait for it to end (then --resume if it was interrupted)") from None
+        try:
+            yield
+        finally:
+            try:
+                os.unlink(lock)
+            except OSError:
+                pass
+    finally:
+        os.close(fd)
 
 
 def sweep_summary(ds, title="", run=None) -> str:
