@@ -471,6 +471,10 @@ OUTPUTS = {o.key: o for o in (
                                                        "target stays below settling_angle (NaN: never)",
                            lambda spec: dict(settling_angle_rad=spec.settling_angle, located=_LOCATED)),),
                 needs=("target",), keys=("settling_angle",), compute=lambda c: {"slew_time": _settling(c)}),
+    SweepOutput("max_rate", "largest |omega| over the output times (variable max_body_rate: [control] max_rate is "
+                            "the PD's limit)",
+                (OutputVar("max_body_rate", (), "rate", "largest |omega| of the body over the output times"),),
+                compute=lambda c: {"max_body_rate": float(np.max(_rate(c.omega)))}),
 )}
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 

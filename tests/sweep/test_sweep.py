@@ -94,7 +94,7 @@ BAD = [
      r"the \[orbit\] gives true_anomaly; vary orbit_true_anomaly"),
     ("energy on an eccentric orbit", 'samples = 3\noutputs = ["final_energy_error"]\n' + KEP_SWEEP,
      r"\[sweep\] outputs: 'final_energy_error': nothing is conserved .* eccentric \(e = 0.2\)"),
-    ("unknown output", 'samples = 3\noutputs = ["max_rate"]\n' + KEP_SWEEP, r"\[sweep\] outputs: 'max_rate' is not one of"),
+    ("unknown output", 'samples = 3\noutputs = ["max_speed"]\n' + KEP_SWEEP, r"\[sweep\] outputs: 'max_speed' is not one of"),
     ("tumbling angle without tumbling", 'samples = 3\noutputs = ["final_state"]\ntumbling_angle = "30 deg"\n' + KEP_SWEEP,
      r"\[sweep\] tumbling_angle: only used with 'tumbling'"),
     ("bad seed", "samples = 3\nseed = -4\n" + KEP_SWEEP, r"\[sweep\] seed: -4 must be an integer in \[0, "),

@@ -68,3 +68,15 @@ def test_slew_time_is_the_single_runs_attitude_error_to_the_target():
     _refused("slew", '["slew_time"]', r"\[sweep\] settling_angle.*missing; 'slew_time'")
     _refused("bdot", '["max_control_torque"]\nsettling_angle = "1 deg"',
              r"settling_angle.*only used with 'settling_time' or 'slew_time'")
+
+
+# --- max_rate
+def test_max_rate_is_the_single_runs_largest_body_rate():
+    sw = _sweep(SLEW, ["max_rate"])
+    ds = sw.compute()
+    one = sw.scenario.run()
+    assert "max_rate" not in ds  # the variable is max_body_rate: [control] max_rate is the PD's limit (1 deg/s)
+    rate = np.linalg.norm(one["omega"].values, axis=-1).max()
+    assert ds["max_body_rate"].attrs["units"] == one["omega"].attrs["units"] == "rad s^-1"
+    assert ds["max_body_rate"].values[0] == pytest.approx(rate, rel=1e-12)
+    assert np.deg2rad(0.9) < rate < np.deg2rad(1.0) * 1.05
