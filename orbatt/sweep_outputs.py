@@ -395,6 +395,14 @@ def _max_norm(v):
     return float(np.max(np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])))
 
 
+def _final_wheel_momentum(c):
+    """``sum_k h_k a_k`` at the last output, body axes (internal momentum unit), written out."""
+    H = np.zeros(3)
+    for k, wh in enumerate(c.body.wheels):
+        H = H + c.h[-1, k] * np.asarray(wh.axis, dtype=np.float64)
+    return {"final_wheel_momentum": H}
+
+
 _LOCATED = "cubic through 4 outputs"
 
 
@@ -475,6 +483,11 @@ OUTPUTS = {o.key: o for o in (
                             "the PD's limit)",
                 (OutputVar("max_body_rate", (), "rate", "largest |omega| of the body over the output times"),),
                 compute=lambda c: {"max_body_rate": float(np.max(_rate(c.omega)))}),
+    SweepOutput("final_wheel_momentum", "the wheels' total angular momentum at the end, body axes",
+                (OutputVar("final_wheel_momentum", ("axis",), "momentum",
+                           "total angular momentum of the reaction wheels at the last output (body components)",
+                           lambda spec: dict(frame="B", comment="sum_k h_k a_k")),),
+                needs=("wheels",), compute=_final_wheel_momentum),
 )}
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 

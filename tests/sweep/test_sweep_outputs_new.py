@@ -80,3 +80,17 @@ def test_max_rate_is_the_single_runs_largest_body_rate():
     assert ds["max_body_rate"].attrs["units"] == one["omega"].attrs["units"] == "rad s^-1"
     assert ds["max_body_rate"].values[0] == pytest.approx(rate, rel=1e-12)
     assert np.deg2rad(0.9) < rate < np.deg2rad(1.0) * 1.05
+
+
+# --- final_wheel_momentum
+def test_final_wheel_momentum_is_the_single_runs():
+    sw = _sweep(SLEW, ["final_wheel_momentum"])
+    ds = sw.compute()
+    one = sw.scenario.run()
+    axes = np.array([w.axis for w in sw.scenario.body.wheels])
+    h = one["wheel_momentum"].values[-1] @ axes  # sum_k h_k a_k, body axes
+    var = ds["final_wheel_momentum"]
+    assert var.dims == ("case", "axis") and var.attrs["units"] == one["wheel_momentum"].attrs["units"] == "kg m^2 s^-1"
+    np.testing.assert_allclose(var.values[0], h, rtol=1e-12, atol=1e-15 * np.abs(h).max())
+    assert np.abs(h).max() > 0
+    _refused("bdot", '["final_wheel_momentum"]', r"final_wheel_momentum.*reaction wheels")
