@@ -38,7 +38,8 @@ from . import units as U
 from .core import kernel_floats
 from .core import gyrostat as kg
 from .core import potentials as kp
-from .laws import LAWS, law_of
+from .dataset.control import mode_column
+from .laws import LAWS, MODE_SEQUENCE, law_of
 from .methods.problem import kernel_spec
 from .units import from_kernel, to_output
 
@@ -109,6 +110,8 @@ NEEDS = {
                f"a [control] law with magnetorquers ({_dipole_laws()})"),
     "target": (lambda control, wheels: control is not None and law_of(control).holds_frame(control),
                "a [control] law holding a target (law = 'pd', target = 'orbital' or 'inertial')"),
+    "modes": (lambda control, wheels: control is not None and law_of(control) is MODE_SEQUENCE,
+              "a mode sequence ([[control.modes]])"),
 }
 
 
@@ -403,6 +406,21 @@ def _final_wheel_momentum(c):
     return {"final_wheel_momentum": H}
 
 
+def _mode_entry_time(c):
+    """The time each mode began, from the sequence's state along the outputs (as the single
+    run's Dataset: :func:`orbatt.dataset.control.control_variables`)."""
+    control = c.potential.control
+    nw = len(c.body.wheels)
+    col = nw + mode_column(kernel_spec(c.potential, [c.body]), nw)
+    mode, began = c.h[:, col], c.h[:, col + 1]
+    entry = np.full(len(control.names), np.nan)
+    for k in range(entry.size):
+        at = began[mode == k]
+        if at.size:
+            entry[k] = np.min(at)
+    return {"mode_entry_time": entry}
+
+
 _LOCATED = "cubic through 4 outputs"
 
 
@@ -488,6 +506,10 @@ OUTPUTS = {o.key: o for o in (
                            "total angular momentum of the reaction wheels at the last output (body components)",
                            lambda spec: dict(frame="B", comment="sum_k h_k a_k")),),
                 needs=("wheels",), compute=_final_wheel_momentum),
+    SweepOutput("mode_entry_time", "time each mode of the sequence began",
+                (OutputVar("mode_entry_time", ("mode_index",), "time",
+                           "time each mode of the sequence began (NaN: not entered by the last output)"),),
+                needs=("modes",), compute=_mode_entry_time),
 )}
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 

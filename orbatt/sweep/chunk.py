@@ -348,7 +348,8 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
 
 def _sizes(sc):
     """``{dim: length}`` of the dimensions the study outputs' variables have beyond ``case``."""
-    return {"wheel": len(sc.body.wheels), "axis": 3}
+    control = getattr(sc.potential, "control", None)
+    return {"wheel": len(sc.body.wheels), "axis": 3, "mode_index": len(getattr(control, "names", ()) or ())}
 
 
 class _Group:
@@ -469,7 +470,7 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
 def _study_variables(sc, spec, UN, res, coords):
     """The Dataset variables of the study outputs in ``res`` (their descriptors,
     :data:`orbatt.sweep_outputs.OUTPUTS`; SI), with the coordinates of their dimensions
-    (``wheel``) added to ``coords``."""
+    (``wheel``, ``mode_index``) added to ``coords``."""
     dimless = sc.spec.dimensionless
     data = {}
     for key in spec.outputs:
@@ -485,6 +486,11 @@ def _study_variables(sc, spec, UN, res, coords):
                                          **extra)
             if "wheel" in var.dims and "wheel" not in coords:
                 coords["wheel"] = cf_variable(("wheel",), np.arange(len(sc.body.wheels)), "1", "reaction wheel index")
+            if "mode_index" in var.dims and "mode_index" not in coords:
+                names = sc.potential.control.names
+                coords["mode_index"] = cf_variable(("mode_index",), np.arange(len(names)), "1",
+                                                   "mode of the sequence (flag value of the single run's mode)",
+                                                   mode_names=" ".join(names))
     return data
 
 

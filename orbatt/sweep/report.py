@@ -25,10 +25,10 @@ def percentile_table(ds) -> list[str]:
     """Lines of a table: each scalar output's min, median, 95th, 99th percentile and max over
     the cases with a value, and the count of cases without one (NaN: never reached, or failed);
     angles in degrees. Per-wheel outputs (``case, wheel``) get a row per wheel (``final_wheel_momentum`` one per
-    axis), and the saturation flags a count."""
+    axis, ``mode_entry_time`` one per mode), and the saturation flags a count."""
     rows = []
     names = scalar_outputs(ds)
-    names += [n for n in ("max_wheel_speed", "final_wheel_momentum") if n in ds]  # a row per wheel, per axis
+    names += [n for n in ("max_wheel_speed", "final_wheel_momentum", "mode_entry_time") if n in ds]  # a row each
     for name in names:
         v = ds[name]
         units = v.attrs.get("units", "")

@@ -30,6 +30,16 @@ def _short(name, t_end):
     return re.sub(r"^t_end = .*$", f"t_end = {t_end}", (SCEN / f"{name}.toml").read_text(), flags=re.M)
 
 
+def _modes(t_end):
+    """B-dot detumbling, left at a tick once |omega| has stayed below 7 deg/s for 10 s, then the
+    orbital frame held by the PD law (a mode sequence)."""
+    modes = ('[control]\nperiod = "1 s"\n\n[[control.modes]]\nname = "detumble"\nlaw = "bdot"\n'
+             'gain = "4e4 A m2 s / T"\nmax_dipole = "0.2 A m2"\nuntil_rate = "7 deg/s"\nhold = "10 s"\n\n'
+             '[[control.modes]]\nname = "nadir"\nlaw = "pd"\ntarget = "orbital"\nkp = "2e-5 N m"\n'
+             'kd = "5e-4 N m s"\nmax_torque = "1e-4 N m"\n\n')
+    return re.sub(r'\[control\]\nlaw = "bdot"\n[^\[]*', lambda m: modes, _short("cubesat-bdot-detumble", t_end))
+
+
 #: name: (scenario text, the swept parameter, the keys an output needs)
 SCENARIOS = {
     "wheels": (_short("lvlh-hold-wheels", '"200 s"'), 'omega1 = { values = ["0.5 deg/s", "0.1 deg/s"] }',
@@ -38,6 +48,8 @@ SCENARIOS = {
              {"detumble_time": 'detumble_rate = "5 deg/s"', "settling_time": 'settling_angle = "25 deg"'}),
     "torque-free": (_short("paper-torque-free", "1"), "inertia1 = { values = [1.25, 1.3] }",
                     {"detumble_time": "detumble_rate = 1.0", "settling_time": 'settling_angle = "25 deg"'}),
+    "modes": (_modes('"300 s"'), 'omega1 = { values = ["4 deg/s", "-2 deg/s"] }',
+              {"detumble_time": 'detumble_rate = "5 deg/s"', "settling_time": 'settling_angle = "25 deg"'}),
 }
 for _name, (_, _, _keys) in SCENARIOS.items():  # slew_time reads settling_time's threshold
     _keys["slew_time"] = _keys["settling_time"]

@@ -94,3 +94,16 @@ def test_final_wheel_momentum_is_the_single_runs():
     np.testing.assert_allclose(var.values[0], h, rtol=1e-12, atol=1e-15 * np.abs(h).max())
     assert np.abs(h).max() > 0
     _refused("bdot", '["final_wheel_momentum"]', r"final_wheel_momentum.*reaction wheels")
+
+
+# --- mode_entry_time
+def test_mode_entry_time_is_the_single_runs():
+    sw = _sweep(_modes_text(), ["mode_entry_time"])
+    ds = sw.compute()
+    one = sw.scenario.run()
+    var = ds["mode_entry_time"]
+    assert var.dims == ("case", "mode_index") and var.attrs["units"] == "s"
+    np.testing.assert_array_equal(var.values[0], one["mode_entry_time"].values)
+    assert var.values[0, 0] == 0.0 and 0.0 < var.values[0, 1] < 300.0 and np.isnan(var.values[0, 2])
+    assert ds["mode_index"].attrs["mode_names"] == "detumble nadir never"
+    _refused("slew", '["mode_entry_time"]', r"mode_entry_time.*mode sequence")
