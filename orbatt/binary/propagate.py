@@ -84,10 +84,15 @@ class BinaryTrajectory:
 
 def apply_impulse(y, c, delta_v):
     """``y`` after the secondary's velocity change ``delta_v`` (radial, along-track, normal,
-    km/s): ``p += mu delta_v`` (inertial)."""
+    km/s): ``p += mu delta_v`` (inertial). IntegrationError where the relative position and
+    velocity are parallel (a radial orbit has no along-track or normal direction)."""
     y = y.copy()
     mu = c[C_MU]
-    basis = rtn_basis(y[0:3], y[3:6] / mu)
+    r, v = y[0:3], y[3:6] / mu
+    if not np.linalg.norm(np.cross(r, v)) > 1e-12 * np.linalg.norm(r) * np.linalg.norm(v):
+        raise IntegrationError("binary: an impulse on a radial orbit (the relative position and velocity are "
+                               "parallel): its radial, along-track and normal directions are undefined")
+    basis = rtn_basis(r, v)
     y[3:6] += mu * (np.asarray(delta_v, dtype=np.float64) @ basis)
     return y
 
@@ -214,8 +219,9 @@ def propagate_binary(system, y0, times, *, method="dop853", rtol=1e-10, atol=1e-
                 rec["buf"] = None
             if rec["stop"] is not None or pace.stopped:
                 break
-            for k in group:  # the impulses at t_stop, in order
-                y[:] = apply_impulse(y, c, k.delta_v)
+            rec["stop"] = _apply(y, c, group, t_stop)  # the impulses at t_stop, in order
+            if rec["stop"] is not None:
+                break
             if group:
                 cnt[kd.CNT_FLAGS] &= ~kd.FLAG_F0_VALID  # the derivative jumps: evaluate it again
                 st[kd.ST_H] = 0.0  # and choose a new first step
@@ -273,6 +279,16 @@ class _Pacer:
         """The last report (fraction 1 when the run completed)."""
         if self.progress is not None and self.stopped is None:
             self.progress(self._info(t, steps, 1.0 if complete else None))
+
+
+def _apply(y, c, group, t):
+    """Apply the impulses ``group`` to ``y`` in place, in order; why not (a message), or None."""
+    for k in group:
+        try:
+            y[:] = apply_impulse(y, c, k.delta_v)
+        except IntegrationError as exc:
+            return f"{str(exc).removeprefix('binary: ')} (at t = {t:.9g} s)"
+    return None
 
 
 def _segments(imps):
@@ -378,8 +394,9 @@ def _propagate_split(system, y0, times, step, composition, imps, progress):
             if rec["stop"] is not None or pace.stopped:
                 break
             rec["k_now"] = int(targets[-1]) if targets.size else rec["k_now"]
-            for k in group:  # the impulses at t_stop, in order
-                y[:] = apply_impulse(y, c, k.delta_v)
+            rec["stop"] = _apply(y, c, group, t_stop)  # the impulses at t_stop, in order
+            if rec["stop"] is not None:
+                break
     except KeyboardInterrupt:
         collect()
         rec["steps"] += int(rec["cnt"][ks.CNT_STEPS])

@@ -223,3 +223,19 @@ def test_sweep_outputs_as_a_nested_list_is_refused(tmp_path):
     p = _sweep(tmp_path, '"body.mass" = { values = ["4e9 kg", "5e9 kg"] }', outputs='[["final_state"]]')
     one_line_refusal(cli("sweep", p, "-o", tmp_path / "sw.nc", cwd=tmp_path), "sw.toml", "[sweep] outputs",
                      "['final_state']")
+
+
+def test_an_impulse_on_a_radial_orbit_stops_the_run_keeping_what_was_computed():
+    """A radial orbit (r parallel to v) has no along-track or normal direction: the impulse
+    stops the run with a message, the outputs before it kept (no NaN state)."""
+    import astropy.units as u
+
+    s = binary_system(rigid=False)
+    y0 = s.state([1.19, 0.0, 0.0] * u.km, [1e-5, 0.0, 0.0] * u.km / u.s, [1.0, 0.0, 0.0, 0.0],
+                 [0.0, 0.0, 0.0] * u.rad / u.s)
+    t = np.linspace(0.0, 600.0, 4)
+    for kw in ({}, {"method": "splitting", "step": 20.0}):
+        with pytest.raises(IntegrationError, match=r"radial orbit .* \(at t = 400 s\)") as info:
+            propagate_binary(s, y0, t, impulses=[Impulse(400.0, (0.0, 1e-6, 0.0))], **kw)
+        tr = info.value.trajectory
+        assert tr.t.tolist() == t[:3].tolist() and np.all(np.isfinite(tr.y)) and not tr.complete
