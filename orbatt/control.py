@@ -34,7 +34,10 @@ AXIS_TOLERANCE = 1e-6
 #: most reaction wheels of a body
 MAX_WHEELS = 16
 #: PD targets and actuators by name
-TARGETS = {"orbital": kc.TARGET_ORBITAL, "inertial": kc.TARGET_INERTIAL, "sun": kc.TARGET_SUN}
+TARGETS = {"orbital": kc.TARGET_ORBITAL, "inertial": kc.TARGET_INERTIAL, "sun": kc.TARGET_SUN,
+           "ground": kc.TARGET_GROUND}
+#: the targets a body axis points at (``target_axis``), along the line of sight
+POINTING_TARGETS = ("sun", "ground")
 ACTUATORS = ("ideal", "wheels")
 
 
@@ -146,6 +149,23 @@ def _period(period):
     return v
 
 
+def _location(loc):
+    """``(latitude rad, longitude rad, height m)`` of a ground target (Quantities or plain rad,
+    rad, m), checked."""
+    if loc is None:
+        raise InputError("target_location: target = 'ground' needs [latitude, longitude, height], e.g. "
+                         "['43.6 deg', '1.44 deg', '150 m']")
+    if isinstance(loc, u.Quantity) or not hasattr(loc, "__len__") or len(loc) != 3:
+        raise InputError(f"target_location: expected [latitude, longitude, height], got {loc!r}")
+    lat = _value(loc[0], u.rad, "target_location latitude") if isinstance(loc[0], (u.Quantity, str)) else float(loc[0])
+    lon = _value(loc[1], u.rad, "target_location longitude") if isinstance(loc[1], (u.Quantity, str)) else float(loc[1])
+    h = _value(loc[2], u.m, "target_location height") if isinstance(loc[2], (u.Quantity, str)) else float(loc[2])
+    if not (abs(lat) <= np.pi / 2 and np.isfinite(lon) and abs(lon) <= 4 * np.pi and -1.2e4 <= h <= 1e5):
+        raise InputError(f"target_location: latitude {np.degrees(lat):.6g} deg (within +-90), longitude "
+                         f"{np.degrees(lon):.6g} deg (within +-720), height {h:.6g} m (within -12 km .. 100 km)")
+    return (lat, lon, h)
+
+
 def command_slots(period, wheels):
     """The flight-software slots of a law's kernel row (:func:`orbatt.core.control.flight_software`):
     its ``period`` in s (None: continuous, 0), ticks from ``t = 0``, and its held command after
@@ -187,6 +207,11 @@ class PDControl:
         The target attitude, scalar first: target -> inertial S (``target = "inertial"``,
         required), or target -> orbital O (``target = "orbital"``, optional: a constant offset
         from the orbital frame such as a roll, default identity).
+    target_location : 3 values, optional
+        ``target = "ground"``: the point on the rotating Earth to track, geodetic WGS84 latitude,
+        longitude (angles; plain numbers are rad) and height (length; plain: m). The law points
+        ``target_axis`` along the line of sight and feeds its rate forward (ITRS -> GCRS through
+        ERFA, as the environment; needs the orbit's epoch).
     target_axis : 3 floats, optional
         The unit body axis to point at the Sun (``target = "sun"``, required).
     max_rate : Quantity (angular rate), optional
@@ -218,7 +243,8 @@ class PDControl:
     law = "pd"
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
-                 target_axis=None, max_rate=None, ki=None, period=None, dump_gain=None, dump_max_dipole=None):
+                 target_axis=None, max_rate=None, ki=None, period=None, dump_gain=None, dump_max_dipole=None,
+                 target_location=None):
         if target not in TARGETS:
             raise InputError(f"target: {target!r} is not one of {', '.join(map(repr, TARGETS))}")
         if actuator not in ACTUATORS:
@@ -237,25 +263,30 @@ class PDControl:
         if target == "inertial" and target_q is None:
             raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
         if target_q is not None:
-            if target == "sun":
-                raise InputError("target_q: only for target = 'inertial' or 'orbital' (target is 'sun'; "
+            if target in POINTING_TARGETS:
+                raise InputError(f"target_q: only for target = 'inertial' or 'orbital' (target is {target!r}; "
                                  "give target_axis)")
             tq = np.asarray(target_q, dtype=np.float64)
             if tq.shape != (4,) or not np.all(np.isfinite(tq)) or abs(np.linalg.norm(tq) - 1) > AXIS_TOLERANCE:
                 raise InputError(f"target_q: {target_q!r} is not a unit quaternion [w, x, y, z]")
             self.target_q = tq / np.linalg.norm(tq)
-        if target == "sun":
+        if target in POINTING_TARGETS:
             if target_axis is None:
-                raise InputError("target_axis: target = 'sun' needs the body axis to point at the Sun, e.g. [0, 0, 1]")
+                raise InputError(f"target_axis: target = {target!r} needs the body axis to point at it, e.g. [0, 0, 1]")
             self.target_axis = _unit_vector(target_axis, "target_axis")
         elif target_axis is not None:
-            raise InputError(f"target_axis: only for target = 'sun' (target is {target!r})")
+            raise InputError(f"target_axis: only for target = 'sun' or 'ground' (target is {target!r})")
+        self.target_location = None
+        if target == "ground":
+            self.target_location = _location(target_location)
+        elif target_location is not None:
+            raise InputError(f"target_location: only for target = 'ground' (target is {target!r})")
 
     def row(self, wheels, sun_table=None):
         """The :data:`~orbatt.core.model.PD_CONTROL` row for a body with ``wheels`` (internal
         units); ``sun_table``: the Sun's position along the orbit (``target = sun``)."""
         tmax = np.inf if self.max_torque is None else U.to_kernel(self.max_torque, "torque")
-        values = (self.target_axis if self.target == "sun" else
+        values = (self.target_axis if self.target in POINTING_TARGETS else
                   self.target_q if self.target_q is not None else (1.0, 0.0, 0.0, 0.0))
         self.check_wheels(wheels)
         axes = np.array([w.axis for w in wheels]) if self.actuator == "wheels" else None
@@ -284,6 +315,7 @@ class PDControl:
         return {"law": self.law, "target": self.target, "kp": self.kp, "kd": self.kd, "max_torque": self.max_torque,
                 "actuator": self.actuator, "target_q": None if self.target_q is None else self.target_q.tolist(),
                 "target_axis": None if self.target_axis is None else self.target_axis.tolist(),
+                "target_location": None if self.target_location is None else list(self.target_location),
                 "max_rate": self.max_rate, "ki": self.ki, "period": self.period, "dump_gain": self.dump_gain,
                 "dump_max_dipole": self.dump_max_dipole}
 
@@ -297,7 +329,8 @@ class PDControl:
         """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
         gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
         Sun's position (``"sun"``) for ``target = "sun"``."""
-        sun = tables("sun") if self.target == "sun" else None
+        sun = (tables("sun") if self.target == "sun" else
+               tables(("ground", *self.target_location)) if self.target == "ground" else None)
         # made once per set of wheels, settings and Sun table (~60 us): the settings are in the
         # key, so that a law changed after a run (law.kp = ...) is not run with its old row
         key = (tuple(wheels), repr(sorted(self.settings().items())))
@@ -336,6 +369,8 @@ class PDControl:
             d["target_q"] = self.target_q.tolist()
         if self.target_axis is not None:
             d["target_axis"] = self.target_axis.tolist()
+        if self.target_location is not None:
+            d["target_location_rad_rad_m"] = list(self.target_location)
         return d
 
     def __repr__(self):

@@ -165,7 +165,9 @@ def _dumps(s):
 
 
 def _pd_fields(s):
-    return (("sun",) if s.get("target") == "sun" else ()) + (("field",) if _dumps(s) else ())
+    target = s.get("target")
+    return (("sun",) if target == "sun" else ("ground",) if target == "ground" else ()) + \
+        (("field",) if _dumps(s) else ())
 
 
 def _pd_scales(s, inertia, b):
@@ -206,8 +208,11 @@ PD = Law(
      LawKey("target_q", "plain, 4 values", "required for inertial",
             "target attitude [w, x, y, z], body -> inertial; with target = 'orbital' (optional) the held attitude "
             "relative to the orbital frame", "vector", size=4),
-     LawKey("target_axis", "plain, 3 values", "required for sun", "unit body axis to point at the Sun", "vector",
-            size=3),
+     LawKey("target_axis", "plain, 3 values", "required for sun, ground",
+            "unit body axis to point at the Sun or the ground target", "vector", size=3),
+     LawKey("target_location", "latitude, longitude (angles), height (length)", "required for ground",
+            "the point on the rotating Earth to track (geodetic WGS84; needs an epoch): target_axis along the line "
+            "of sight, its rate fed forward", "location", size=3),
      LawKey("max_rate", "angular rate", "none",
             "rate limit of an eigenaxis slew (Wie, Weiss & Arapostathis 1989): the commanded rate -(kp/kd) e is "
             "scaled to at most max_rate, max_torque acting as the acceleration limit; needs kd > 0",

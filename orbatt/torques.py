@@ -28,6 +28,7 @@ from .core.environment import PIECE_HEADER
 from .core.kinds import BY_NAME
 from .environment import sun as esun
 from .environment.atmosphere import NRLMSIS, PiecewiseExponentialAtmosphere
+from .environment.frames import ground_point_gcrs
 from .environment.tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES,
                                   TABLE_MARGIN, tabulate_along_orbit)
 from .control import BDotControl, PDControl
@@ -348,6 +349,11 @@ class EnvironmentTorques(Potential):
                 tab = self._tabulate(SUN_PIECES, lambda t, r: esun.sun_position(t))
             elif name == "field":
                 tab = self._tabulate(MAGNETIC_FIELD_PIECES, self.magnetic_field.field)
+            elif isinstance(name, tuple) and name[0] == "ground":  # a PD law's ground target
+                lat, lon, h = name[1:]
+                if self.orbit.epoch is None:
+                    raise InputError("epoch: a ground target needs the orbit's epoch (the Earth's rotation)")
+                tab = self._tabulate(MAGNETIC_FIELD_PIECES, lambda t, r: ground_point_gcrs(t, lat, lon, h))
             else:
                 raise ValueError(f"field_table: unknown field {name!r}; one of 'density', 'sun', 'field'")
             self._field_tables[name] = tab

@@ -49,7 +49,7 @@ from .qalg import cross, qconj, qmul, rotate_inv
 from .slots import Slots
 
 #: PD targets
-TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN = 0, 1, 2
+TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN, TARGET_GROUND = 0, 1, 2, 3
 #: actuators of the PD law
 ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
 #: the slots every control law's row starts with (the flight software, issue 32): its
@@ -138,7 +138,7 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
-    if target != TARGET_SUN and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
+    if target not in (TARGET_SUN, TARGET_GROUND) and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
         raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
     fs = flight_software(period, phase, z0)
     if not (max_rate > 0.0) or (max_rate < np.inf and not kd > 0.0):
@@ -230,17 +230,30 @@ def pointing_error(s_b, b):
 
 
 @jit_inline
-def pd_error(q, params, p0, r, xhat, v, sun_s):
+def pd_error(q, params, p0, r, xhat, v, aux, aux_rate):
     """``(e, omega_t)``: the PD law's attitude error ``sgn(q_e0) Im(q_e)`` and the target's rate
-    (body axes) for the attitude ``q``; the orbit's ``r, xhat, v`` and the Sun's position
-    ``sun_s`` (inertial) serve the orbital and Sun targets."""
+    (body axes) for the attitude ``q``; the orbit's ``r, xhat, v`` serve the orbital target,
+    ``aux`` (inertial, km) the Sun's position or a ground target's, ``aux_rate`` (km/s) the
+    ground target's velocity: the body axis ``c`` is pointed along the line of sight ``d = aux -
+    r xhat``, and for a ground target ``omega_t`` is the line of sight's rate ``d x d' / |d|^2``
+    (the feed-forward; the Sun's apparent rate, ~2e-7 rad/s, is left out)."""
     target = params[p0 + _PD_TARGET]
     c = p0 + _PD_C
     wt = (0.0, 0.0, 0.0)
-    if target == TARGET_SUN:
-        dx = sun_s[0] - r * xhat[0]
-        dy = sun_s[1] - r * xhat[1]
-        dz = sun_s[2] - r * xhat[2]
+    if target == TARGET_GROUND:
+        dx = aux[0] - r * xhat[0]
+        dy = aux[1] - r * xhat[1]
+        dz = aux[2] - r * xhat[2]
+        d2 = dx * dx + dy * dy + dz * dz
+        d = math.sqrt(d2)
+        s_b = rotate_inv(q, (dx / d, dy / d, dz / d))
+        qe = pointing_error(s_b, (params[c], params[c + 1], params[c + 2]))
+        ex, ey, ez = aux_rate[0] - v[0], aux_rate[1] - v[1], aux_rate[2] - v[2]
+        wt = rotate_inv(q, ((dy * ez - dz * ey) / d2, (dz * ex - dx * ez) / d2, (dx * ey - dy * ex) / d2))
+    elif target == TARGET_SUN:
+        dx = aux[0] - r * xhat[0]
+        dy = aux[1] - r * xhat[1]
+        dz = aux[2] - r * xhat[2]
         d = math.sqrt(dx * dx + dy * dy + dz * dz)
         s_b = rotate_inv(q, (dx / d, dy / d, dz / d))
         qe = pointing_error(s_b, (params[c], params[c + 1], params[c + 2]))
@@ -257,7 +270,7 @@ def pd_error(q, params, p0, r, xhat, v, sun_s):
 
 
 @jit_inline
-def pd_torque(q, omega, params, p0, r, xhat, v, sun_s, y):
+def pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y):
     """``(tau, raw, e)``: the PD law's commanded torque (body axes, each axis clipped to
     ``max_torque``), the same before the clip, and its attitude error (:func:`pd_error`), for
     the attitude ``q`` and body rate ``omega``:
@@ -271,7 +284,7 @@ def pd_torque(q, omega, params, p0, r, xhat, v, sun_s, y):
     kp = params[p0 + _PD_KP]
     kd = params[p0 + _PD_KD]
     tmax = params[p0 + _PD_TMAX]
-    e, wt = pd_error(q, params, p0, r, xhat, v, sun_s)
+    e, wt = pd_error(q, params, p0, r, xhat, v, aux, aux_rate)
     mr = params[p0 + _PD_MAXRATE]
     if mr < np.inf:
         g = kp / kd

@@ -36,7 +36,7 @@ from .torques import gradient_of_torque
 _W_AXIS, _W_IW = ctl.WHEEL.axis, ctl.WHEEL.iw
 _PD_ACTUATOR = ctl.PD_ACTUATOR
 _CTL_PERIOD, _CTL_PHASE, _CTL_Z0, _CTL_NZ = ctl.CTL_PERIOD, ctl.CTL_PHASE, ctl.CTL_Z0, ctl.CTL_NZ
-_PD_KI, _PD_ZI, _PD_TMAX = ctl.PD.ki, ctl.PD.zi, ctl.PD.max_torque
+_PD_KI, _PD_ZI, _PD_TMAX, _PD_TARGET = ctl.PD.ki, ctl.PD.zi, ctl.PD.max_torque, ctl.PD.target
 _CTL_MODE = ctl.CTL_MODE
 _MD_COUNT, _MD_COND = ctl.MODES.count, ctl.MODES.conditions
 _MD_FIELDS = ctl.MODE_FIELDS
@@ -157,11 +157,8 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                     ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
                     app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
                 continue
-            sun = (0.0, 0.0, 0.0)
-            if terms[j, R1] > terms[j, R0]:
-                s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
-                sun = (s4[0], s4[1], s4[2])
-            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun, y)
+            aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
+            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y)
             ki = params[p0 + _PD_KI]
             if ki > 0.0:
                 zi = int(params[p0 + _PD_ZI])
@@ -379,11 +376,8 @@ def tick(s, y, inertia, terms, params, table, work, start):
         if not start and not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params):
             continue
         if kind == PD_CONTROL:
-            sun = (0.0, 0.0, 0.0)
-            if terms[j, R1] > terms[j, R0]:
-                s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
-                sun = (s4[0], s4[1], s4[2])
-            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, sun, y)
+            aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
+            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y)
             if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
                 ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + wheel_count(params, w0)])
             else:
@@ -411,13 +405,19 @@ def tick(s, y, inertia, terms, params, table, work, start):
 
 
 @jit_inline
-def _pd_row_sun(j, t, terms, table, work):
-    """The Sun's position (inertial) of PD row ``j``'s table at ``t`` (zeros without one)."""
-    sun = (0.0, 0.0, 0.0)
+def pd_row_target(j, t, terms, params, table, work):
+    """``(position, rate)`` of PD row ``j``'s target table at ``t`` (inertial, km and km/s): the
+    Sun's position (its rate left out: zeros), or a ground target's position and velocity;
+    zeros without a table."""
+    pos = (0.0, 0.0, 0.0)
+    rate = (0.0, 0.0, 0.0)
     if terms[j, R1] > terms[j, R0]:
-        s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
-        sun = (s4[0], s4[1], s4[2])
-    return sun
+        if params[terms[j, P0] + _PD_TARGET] == ctl.TARGET_GROUND:
+            pos, rate = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
+        else:
+            s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+            pos = (s4[0], s4[1], s4[2])
+    return pos, rate
 
 
 @jit
@@ -453,7 +453,8 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
             angle = np.inf
             for j in range(1, terms.shape[0]):  # the attitude error of the mode's PD law
                 if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
-                    e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, _pd_row_sun(j, t, terms, table, work))
+                    aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
+                    e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, aux, aux_rate)
                     angle = 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
             holds = holds and angle < settled
         if holds:

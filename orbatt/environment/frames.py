@@ -345,6 +345,17 @@ def itrs_to_gcrs(t, v_itrs, rotation=None):
     return np.einsum("nji,nj->ni", rotation_gcrs_to_itrs(t) if rotation is None else rotation, v)
 
 
+def ground_point_gcrs(t, latitude, longitude, height):
+    """GCRS positions (km, ``(N, 3)``) of a point fixed on the rotating Earth at the instants
+    ``t``: geodetic WGS84 ``latitude``, ``longitude`` (rad) and ``height`` (m), to ITRS by ERFA's
+    ``gd2gc``, then :func:`itrs_to_gcrs`."""
+    import erfa
+
+    t = as_time_array(t)
+    x = erfa.gd2gc(1, float(longitude), float(latitude), float(height)) / 1000.0  # WGS84 = 1; m -> km
+    return itrs_to_gcrs(t, np.broadcast_to(x, (t.shape[0], 3)))
+
+
 def geodetic(t, r_gcrs_km):
     """Geodetic coordinates (WGS84) of geocentric GCRS positions.
 

@@ -115,6 +115,16 @@ def _law_settings(ctx, law, c, table="[control]"):
             out[k.key] = parse_choice(ctx, where, c[k.key], k.choices)
         elif k.kind == "vector":
             out[k.key] = parse_plain_vector(ctx, where, c[k.key], k.size).tolist()
+        elif k.kind == "location":
+            raw = c[k.key]
+            if not isinstance(raw, list) or len(raw) != 3:
+                raise ctx.error(where, f"expected [latitude, longitude, height], e.g. ['43.6 deg', '1.44 deg', '150 m'], "
+                                       f"got {raw!r}")
+            lat = parse_quantity(ctx, f"{where} latitude", raw[0], u.rad, dimensionless=True, bounds=(-1.5707963267948966,
+                                                                                                    1.5707963267948966))
+            lon = parse_quantity(ctx, f"{where} longitude", raw[1], u.rad, dimensionless=True, bounds=(-12.6, 12.6))
+            h = parse_quantity(ctx, f"{where} height", raw[2], u.m, dimensionless=False, bounds=(-1.2e4, 1e5))
+            out[k.key] = [lat, lon, h]
         else:
             v = parse_quantity(ctx, where, c[k.key], u.Unit(k.unit), dimensionless=False,
                                bounds=RANGES["control", k.key])
@@ -133,6 +143,9 @@ def _law_fields(ctx, law, settings, data, orbit):
     fields = law.fields(settings)
     if "sun" in fields and orbit.get("epoch") is None:
         raise ctx.error("[orbit] epoch", "missing; target = 'sun' needs the date to place the Sun (give [orbit] epoch)")
+    if "ground" in fields and orbit.get("epoch") is None:
+        raise ctx.error("[orbit] epoch", "missing; target = 'ground' needs the date to turn the Earth (give [orbit] "
+                                         "epoch)")
     if "field" not in fields:
         return None
     env = data.get("environment", {})
