@@ -199,8 +199,8 @@ def parse_torques(ctx, data, potential_kind, orbit, bdot=False):
         raise ctx.error("[environment] magnetic_field", "'none' with a [torques] residual_dipole; choose 'igrf' or "
                                                         "'dipole'")
     if field != "none" and dipole is None and not bdot:
-        raise ctx.error("[environment] magnetic_field", "only read with a [torques] residual_dipole or a B-dot "
-                                                        "[control]")
+        raise ctx.error("[environment] magnetic_field", "only read with a [torques] residual_dipole or a [control] "
+                                                        "law on magnetorquers (B-dot, or a PD law's dump_gain)")
     if field != "none" and epoch is None:
         raise ctx.error("[orbit] epoch", f"missing; the {field} field needs the date (give [orbit] epoch)")
     if field != "none":
