@@ -43,9 +43,9 @@ from .laws import LAWS, MODE_SEQUENCE, law_of
 from .methods.problem import kernel_spec
 from .units import from_kernel, to_output
 
-__all__ = ["OutputVar", "Threshold", "SweepOutput", "OUTPUTS", "DEFAULT_OUTPUTS", "NEEDS", "THRESHOLDS", "Case",
+__all__ = ["OutputVar", "OutputDim", "DIMS", "Threshold", "SweepOutput", "OUTPUTS", "DEFAULT_OUTPUTS", "NEEDS", "THRESHOLDS", "Case",
            "crossing_time", "refine_crossing", "window_start", "study_series", "target_pointing_error",
-           "study_outputs", "variable_shape", "outputs_markdown", "users_of"]
+           "study_outputs", "variable_shape", "outputs_markdown", "users_of", "per_component_outputs"]
 
 
 @dataclass(frozen=True)
@@ -151,9 +151,31 @@ class SweepOutput:
         return tuple(v.name for v in self.variables)
 
 
-def variable_shape(var, sizes):
-    """The shape of a variable's values per case: ``sizes`` (``{dim: length}``) of its dims."""
-    return tuple(sizes[d] for d in var.dims)
+@dataclass(frozen=True)
+class OutputDim:
+    """A dimension of the outputs' variables beyond ``case``: ``size(sc)`` its length for the
+    nominal scenario ``sc``, ``coordinate(sc) -> (values, units, long_name, attrs)`` its
+    coordinate variable (None: the chunk's Dataset has it)."""
+
+    size: Callable
+    coordinate: Callable | None = None
+
+
+#: the dimensions the study outputs' variables have beyond ``case``
+DIMS = {
+    "axis": OutputDim(lambda sc: 3),
+    "wheel": OutputDim(lambda sc: len(sc.body.wheels),
+                       lambda sc: (np.arange(len(sc.body.wheels)), "1", "reaction wheel index", {})),
+    "mode_index": OutputDim(lambda sc: len(sc.potential.control.names),
+                            lambda sc: (np.arange(len(sc.potential.control.names)), "1",
+                                        "mode of the sequence (flag value of the single run's mode)",
+                                        {"mode_names": " ".join(sc.potential.control.names)})),
+}
+
+
+def variable_shape(var, sc):
+    """The shape of a variable's values per case for the nominal scenario ``sc``."""
+    return tuple(DIMS[d].size(sc) for d in var.dims)
 
 
 def users_of(key):
@@ -525,6 +547,14 @@ def study_outputs(sc, spec, potential, body, inertia, q, Q, h, pointing):
         if o.compute is not None:
             out.update(o.compute(c))
     return out
+
+
+def per_component_outputs(ds):
+    """The float variables of the study outputs in ``ds`` that have a dimension beyond ``case``
+    (``max_wheel_speed``, ``final_wheel_momentum``, ``mode_entry_time``): ``orbatt info``
+    prints a row per component."""
+    return [v.name for o in OUTPUTS.values() if o.compute is not None for v in o.variables
+            if v.dims and v.kind != "flag" and v.name in ds]
 
 
 def outputs_markdown():

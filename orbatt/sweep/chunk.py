@@ -36,7 +36,7 @@ from .case_groups import path_groups
 from .binary_chunk import compute_binary_chunk
 from .case_coords import parameter_coordinates
 from .stats import add_stats
-from ..sweep_outputs import OUTPUTS, study_outputs, target_pointing_error, variable_shape
+from ..sweep_outputs import DIMS, OUTPUTS, study_outputs, target_pointing_error, variable_shape
 from ..state import State, unit_quaternion
 from ..orbital import body_rate_from_orbital
 from ..orbits.base import as_times
@@ -300,10 +300,9 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
     res.update(inertia=inertia, failed=np.zeros(n, dtype=bool), pointing_error=np.full(n, np.nan),
                energy_error=np.full(n, np.nan))
     study = [OUTPUTS[o] for o in spec.outputs if OUTPUTS[o].compute is not None]
-    sizes = _sizes(sc)
     for o in study:  # NaN until computed (-1 for a flag: failed)
         for var in o.variables:
-            shape = (n,) + variable_shape(var, sizes)
+            shape = (n,) + variable_shape(var, sc)
             res[var.name] = np.full(shape, -1, dtype=np.int8) if var.kind == "flag" else np.full(shape, np.nan)
     stats = {}
     pieces = []
@@ -344,12 +343,6 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
             on_cases(int(idx.size))
 
     return chunk_dataset(sc, spec, start + np.arange(n), values, axis, units, res, stats, pieces)
-
-
-def _sizes(sc):
-    """``{dim: length}`` of the dimensions the study outputs' variables have beyond ``case``."""
-    control = getattr(sc.potential, "control", None)
-    return {"wheel": len(sc.body.wheels), "axis": 3, "mode_index": len(getattr(control, "names", ()) or ())}
 
 
 class _Group:
@@ -470,7 +463,7 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
 def _study_variables(sc, spec, UN, res, coords):
     """The Dataset variables of the study outputs in ``res`` (their descriptors,
     :data:`orbatt.sweep_outputs.OUTPUTS`; SI), with the coordinates of their dimensions
-    (``wheel``, ``mode_index``) added to ``coords``."""
+    (:data:`orbatt.sweep_outputs.DIMS`: ``wheel``, ``mode_index``) added to ``coords``."""
     dimless = sc.spec.dimensionless
     data = {}
     for key in spec.outputs:
@@ -484,13 +477,10 @@ def _study_variables(sc, spec, UN, res, coords):
                 extra.update(flag_values=np.array([-1, 0, 1], dtype=np.int8), flag_meanings="failed " + var.flags)
             data[var.name] = cf_variable(("case",) + var.dims, var.written(res[var.name], dimless), var.unit(UN), name,
                                          **extra)
-            if "wheel" in var.dims and "wheel" not in coords:
-                coords["wheel"] = cf_variable(("wheel",), np.arange(len(sc.body.wheels)), "1", "reaction wheel index")
-            if "mode_index" in var.dims and "mode_index" not in coords:
-                names = sc.potential.control.names
-                coords["mode_index"] = cf_variable(("mode_index",), np.arange(len(names)), "1",
-                                                   "mode of the sequence (flag value of the single run's mode)",
-                                                   mode_names=" ".join(names))
+            for d in var.dims:
+                if d not in coords and DIMS[d].coordinate is not None:
+                    values, unit, long_name, attrs = DIMS[d].coordinate(sc)
+                    coords[d] = cf_variable((d,), values, unit, long_name, **attrs)
     return data
 
 

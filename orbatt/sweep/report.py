@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..dataset.sweep_figures import sweep_outputs
+from ..sweep_outputs import per_component_outputs
 
 __all__ = ["PERCENTILES", "scalar_outputs", "percentile_table"]
 
@@ -24,11 +25,11 @@ def scalar_outputs(ds):
 def percentile_table(ds) -> list[str]:
     """Lines of a table: each scalar output's min, median, 95th, 99th percentile and max over
     the cases with a value, and the count of cases without one (NaN: never reached, or failed);
-    angles in degrees. Per-wheel outputs (``case, wheel``) get a row per wheel (``final_wheel_momentum`` one per
-    axis, ``mode_entry_time`` one per mode), and the saturation flags a count."""
+    angles in degrees. Outputs with a dimension beyond ``case`` get a row per wheel, axis or mode
+    (:func:`orbatt.sweep_outputs.per_component_outputs`), and the saturation flags a count."""
     rows = []
     names = scalar_outputs(ds)
-    names += [n for n in ("max_wheel_speed", "final_wheel_momentum", "mode_entry_time") if n in ds]  # a row each
+    names += per_component_outputs(ds)  # a row per wheel, axis, mode
     for name in names:
         v = ds[name]
         units = v.attrs.get("units", "")
