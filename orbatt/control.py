@@ -90,12 +90,24 @@ class ReactionWheel:
         Motor torque limit (default: none).
     max_speed : Quantity (angular velocity), optional
         Speed limit: the motor does not push the rotor beyond it (default: none).
+    friction_coulomb : Quantity (N m), optional
+        Coulomb friction of the bearing: ``coulomb tanh(speed / friction_width)`` against the
+        rotor's speed relative to the body (default: none).
+    friction_viscous : Quantity (N m s), optional
+        Viscous friction: ``viscous speed`` (default: none).
+    friction_width : Quantity (angular velocity), optional
+        The speed over which the Coulomb term turns (default 0.1 rad/s: smooth, so that the step
+        loop does not chatter through zero speed; Basilisk's ``omegaLimitCycle`` is the same idea).
     """
 
     #: the plain settings (:meth:`settings`, :func:`reaction_wheel`): key -> SI unit
-    UNITS = {"axis": None, "inertia": "kg m2", "speed": "rad / s", "max_torque": "N m", "max_speed": "rad / s"}
+    UNITS = {"axis": None, "inertia": "kg m2", "speed": "rad / s", "max_torque": "N m", "max_speed": "rad / s",
+             "friction_coulomb": "N m", "friction_viscous": "N m s", "friction_width": "rad / s"}
+    #: the Coulomb friction's default width (rad/s)
+    FRICTION_WIDTH = 0.1
 
-    def __init__(self, axis, inertia, speed=0.0 * u.rad / u.s, *, max_torque=None, max_speed=None, name=None):
+    def __init__(self, axis, inertia, speed=0.0 * u.rad / u.s, *, max_torque=None, max_speed=None, name=None,
+                 friction_coulomb=None, friction_viscous=None, friction_width=None):
         self.axis = _unit_vector(axis, "axis")
         self.inertia_kg_m2 = _value(inertia, u.kg * u.m**2, "inertia", positive=True)
         self.speed_rad_s = _value(speed, u.rad / u.s, "speed")
@@ -104,13 +116,22 @@ class ReactionWheel:
         if self.max_speed_rad_s is not None and abs(self.speed_rad_s) > self.max_speed_rad_s:
             raise InputError(f"speed: {self.speed_rad_s:.6g} rad/s is above max_speed = {self.max_speed_rad_s:.6g} "
                              "rad/s; lower the initial speed or raise max_speed")
+        self.friction_coulomb = _value(friction_coulomb, u.N * u.m, "friction_coulomb", nonnegative=True,
+                                       allow_none=True)
+        self.friction_viscous = _value(friction_viscous, u.N * u.m * u.s, "friction_viscous", nonnegative=True,
+                                       allow_none=True)
+        self.friction_width = _value(friction_width, u.rad / u.s, "friction_width", positive=True, allow_none=True)
+        if self.friction_width is not None and self.friction_coulomb is None:
+            raise InputError("friction_width: only with friction_coulomb (the speed over which it turns)")
         self.name = name
 
     def settings(self):
         """The plain settings (SI floats, :data:`UNITS`) that :func:`reaction_wheel` makes this
         wheel of again."""
         return {"axis": self.axis.tolist(), "inertia": self.inertia_kg_m2, "speed": self.speed_rad_s,
-                "max_torque": self.max_torque_n_m, "max_speed": self.max_speed_rad_s}
+                "max_torque": self.max_torque_n_m, "max_speed": self.max_speed_rad_s,
+                "friction_coulomb": self.friction_coulomb, "friction_viscous": self.friction_viscous,
+                "friction_width": self.friction_width}
 
     @property
     def inertia(self):
@@ -118,11 +139,16 @@ class ReactionWheel:
         return U.to_kernel(self.inertia_kg_m2, "inertia")
 
     def describe(self):
-        return {"axis": self.axis.tolist(), "inertia_kg_m2": self.inertia_kg_m2, "speed_rad_s": self.speed_rad_s,
-                "max_torque_N_m": self.max_torque_n_m, "max_speed_rad_s": self.max_speed_rad_s}
+        d = {"axis": self.axis.tolist(), "inertia_kg_m2": self.inertia_kg_m2, "speed_rad_s": self.speed_rad_s,
+             "max_torque_N_m": self.max_torque_n_m, "max_speed_rad_s": self.max_speed_rad_s}
+        for key, unit in (("friction_coulomb", "N_m"), ("friction_viscous", "N_m_s"), ("friction_width", "rad_s")):
+            if getattr(self, key) is not None:
+                d[f"{key}_{unit}"] = getattr(self, key)
+        return d
 
     def _key(self):
-        return (tuple(self.axis), self.inertia_kg_m2, self.speed_rad_s, self.max_torque_n_m, self.max_speed_rad_s)
+        return (tuple(self.axis), self.inertia_kg_m2, self.speed_rad_s, self.max_torque_n_m, self.max_speed_rad_s,
+                self.friction_coulomb, self.friction_viscous, self.friction_width)
 
     def __eq__(self, other):
         return isinstance(other, ReactionWheel) and self._key() == other._key()
@@ -180,7 +206,10 @@ def wheels_row(wheels):
     return (km.WHEELS, kc.wheel_params(
         [w.axis for w in wheels], [w.inertia for w in wheels],
         [inf if w.max_torque_n_m is None else U.to_kernel(w.max_torque_n_m, "torque") for w in wheels],
-        [inf if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels]), None)
+        [inf if w.max_speed_rad_s is None else w.max_speed_rad_s for w in wheels],
+        [0.0 if w.friction_coulomb is None else U.to_kernel(w.friction_coulomb, "torque") for w in wheels],
+        [0.0 if w.friction_viscous is None else U.to_kernel(w.friction_viscous, "torque_time") for w in wheels],
+        [ReactionWheel.FRICTION_WIDTH if w.friction_width is None else w.friction_width for w in wheels]), None)
 
 
 class PDControl:

@@ -58,7 +58,7 @@ ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
 #: wheels' momenta) and its size ``nz`` (0 for a continuous law)
 FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1), ("mode", 1))
 #: the parameter layouts (module docstring): one wheel, the PD law, B-dot
-WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1))
+WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1), ("coulomb", 1), ("viscous", 1), ("width", 1))
 PD = Slots(*FLIGHT_SOFTWARE, ("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4),
            ("max_rate", 1), ("ki", 1), ("zi", 1), tail="pinv")
 BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
@@ -81,6 +81,7 @@ WHEEL_SIZE = WHEEL.size
 PD_HEADER = PD.size
 # the slot offsets as module constants: numba folds them into the kernels as literals
 _W_AXIS, _W_IW, _W_UMAX, _W_SMAX = WHEEL.axis, WHEEL.iw, WHEEL.u_max, WHEEL.speed_max
+_W_COULOMB, _W_VISCOUS, _W_WIDTH = WHEEL.coulomb, WHEEL.viscous, WHEEL.width
 _PD_TARGET, _PD_KP, _PD_KD, _PD_TMAX, _PD_C, _PD_PINV = PD.target, PD.kp, PD.kd, PD.max_torque, PD.c, PD.pinv
 _PD_MAXRATE, _PD_KI, _PD_ZI = PD.max_rate, PD.ki, PD.zi
 #: the slot of the PD law's actuator (``params[p0 + PD_ACTUATOR]``)
@@ -88,15 +89,16 @@ PD_ACTUATOR = PD.actuator
 _BD_GAIN, _BD_MMAX = BDOT.gain, BDOT.max_dipole
 
 
-def wheel_params(axes, inertia, max_torque, max_speed):
+def wheel_params(axes, inertia, max_torque, max_speed, coulomb=0.0, viscous=0.0, width=1.0):
     """The parameters of a :data:`~orbatt.core.model.WHEELS` row: unit spin axes ``(n, 3)``
     (body), axial moments ``(n,)``, motor torque limits and speed limits ``(n,)`` (``inf``:
     none)."""
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 3)
     n = axes.shape[0]
-    iw, um, sm = (np.broadcast_to(np.asarray(x, dtype=np.float64).ravel(), (n,)) for x in (inertia, max_torque,
-                                                                                           max_speed))
-    rows = [WHEEL.pack(axis=axes[k], iw=iw[k], u_max=um[k], speed_max=sm[k]) for k in range(n)]
+    iw, um, sm, fc, fv, fw = (np.broadcast_to(np.asarray(x, dtype=np.float64).ravel(), (n,))
+                              for x in (inertia, max_torque, max_speed, coulomb, viscous, width))
+    rows = [WHEEL.pack(axis=axes[k], iw=iw[k], u_max=um[k], speed_max=sm[k], coulomb=fc[k], viscous=fv[k],
+                       width=fw[k]) for k in range(n)]
     return np.concatenate([[float(n)], *rows])
 
 
@@ -317,6 +319,22 @@ def windup_gate(raw, e, ki, tmax):
     if (raw > tmax and e < 0.0) or (raw < -tmax and e > 0.0):
         return 0.0
     return e
+
+
+@jit_inline
+def wheel_friction(omega, y, params, wheels0, k):
+    """The friction torque on wheel ``k``'s rotor (opposing its speed relative to the body):
+    ``coulomb tanh(speed / width) + viscous speed`` (Basilisk's ``reactionWheelStateEffector``
+    model, its Coulomb sign smoothed over ``width`` so that the step loop does not chatter near
+    zero speed); an internal torque: ``dh_k/dt -= f``, the total momentum unchanged."""
+    w = wheels0 + 1 + WHEEL_SIZE * k
+    c = params[w + _W_COULOMB]
+    b = params[w + _W_VISCOUS]
+    if c == 0.0 and b == 0.0:
+        return 0.0
+    speed = y[8 + k] / params[w + _W_IW] - (params[w + _W_AXIS] * omega[0] + params[w + _W_AXIS + 1] * omega[1]
+                                            + params[w + _W_AXIS + 2] * omega[2])
+    return c * math.tanh(speed / params[w + _W_WIDTH]) + b * speed
 
 
 @jit_inline

@@ -218,6 +218,8 @@ def extended_rates(t, dtds, r, xhat, v, y, inertia, terms, params, table, work, 
     for k in range(4):
         dy[k] = dtds * (0.25 * qd[k])
         dy[4 + k] = dtds * (0.25 * Qd[k] - G[k] - Gc[k])
+    for k in range(nw):  # the rotors' friction: an internal torque
+        dy[8 + k] -= ctl.wheel_friction(omega, y, params, w0, k)
     for k in range(8, y.shape[0]):  # the wheels' and the controllers' rates (control_torques wrote d/dt)
         dy[k] *= dtds
 

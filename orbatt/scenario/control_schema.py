@@ -39,7 +39,11 @@ from .torques_schema import check_field_epoch
 
 __all__ = ["CONTROL_KEYS", "WHEEL_KEYS", "parse_control"]
 
-WHEEL_KEYS = {"axis", "inertia", "speed", "max_torque", "max_speed"}
+WHEEL_KEYS = {"axis", "inertia", "speed", "max_torque", "max_speed", "friction_coulomb", "friction_viscous",
+              "friction_width"}
+#: the wheels' friction keys: key -> (unit, zero allowed)
+FRICTION_KEYS = {"friction_coulomb": (u.N * u.m, True), "friction_viscous": (u.N * u.m * u.s, True),
+                 "friction_width": (u.rad / u.s, False)}
 RATE = u.rad / u.s
 
 
@@ -81,6 +85,14 @@ def _wheels(ctx, raw):
                                      ("body.wheels", "max_torque")) if "max_torque" in w else None),
             "max_speed": (_positive(ctx, f"{where} max_speed", w["max_speed"], RATE, ("body.wheels", "max_speed"))
                           if "max_speed" in w else None)}
+        for key, (unit, zero) in FRICTION_KEYS.items():
+            v = None
+            if key in w:
+                v = parse_quantity(ctx, f"{where} {key}", w[key], unit, dimensionless=False,
+                                   bounds=RANGES["body.wheels", key])
+                if not (v > 0 or (zero and v == 0)):
+                    raise ctx.error(f"{where} {key}", f"{w[key]!r} must be {'>= 0' if zero else 'positive'}")
+            settings[key] = v
         try:
             reaction_wheel(settings, name=where)
         except InputError as exc:

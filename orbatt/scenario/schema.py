@@ -124,6 +124,10 @@ inertia     mass x length^2  required  axial moment of the rotor
 speed       angular rate     0         rotor speed relative to the body at the start (`"1000 rpm"`)
 max_torque  torque (N m)     none      motor torque limit
 max_speed   angular rate     none      speed limit: the motor does not push the rotor beyond it
+friction_coulomb  torque (N m)  none  bearing friction against the rotor's speed relative to the body:
+                                      friction_coulomb tanh(speed / friction_width) (Basilisk's model, smoothed)
+friction_viscous  torque x time (N m s)  none  viscous friction: friction_viscous speed
+friction_width  angular rate  0.1 rad/s  the speed over which the Coulomb friction turns (with friction_coulomb)
 
 [body.facets]
 area              area              required  the plate's area (> 0)
