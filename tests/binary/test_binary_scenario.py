@@ -203,4 +203,4 @@ def test_cli_run_info_plot(tmp_path):
     r = cli("plot", out, "-o", tmp_path / "fig")
     figs = sorted(f.name for f in (tmp_path / "fig").glob("*.png"))
     # the figures a binary's content calls for (the secondary's rates; the conserved energy's drift)
-    assert r.returncode == 0 and figs == ["eq-drift.png", "eq-rates.png"], (figs, r.stderr)
+    assert r.returncode == 0 and figs == ["eq-drift.png", "eq-orbit.png", "eq-rates.png"], (figs, r.stderr)
