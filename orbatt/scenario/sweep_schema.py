@@ -147,8 +147,11 @@ def parameter_units(dimensionless):
 
 def sweep_units(spec, dimensionless):
     """CF unit string of every parameter a sweep can vary (:func:`parameter_units`) and of each
-    path it varies (the key's unit as the file writes it; ``"1"`` for a plain number)."""
-    return {**parameter_units(dimensionless), **{k: ("1" if v is None else v) for k, v in spec.paths.items()}}
+    path it varies: the key's unit (the values are in it) in the CF spelling every other variable
+    of the file has (:func:`orbatt.units.unit_string`: ``"kg m2"`` is written ``"kg m^2"``, which
+    UDUNITS-2, astropy and pint all read); ``"1"`` for a plain number."""
+    return {**parameter_units(dimensionless),
+            **{k: ("1" if v is None else U.unit_string(v)) for k, v in spec.paths.items()}}
 
 
 @dataclass(frozen=True)
@@ -457,7 +460,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
         else:
             unit = parameter_unit(p.kind)
             dimless = dimensionless if p.kind in ("inertia", "rate", "length") else p.kind in ("one", "angle")
-        cf = units[name]
+        cf = units[name] if paths.get(name) is None else paths[name]  # messages: the unit as the file writes it
 
         # the physical range of the key the parameter replaces (dimensional scenarios; a std
         # is a spread of the same quantity, bounded alike)

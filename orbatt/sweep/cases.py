@@ -91,8 +91,9 @@ class Sweep:
         dimless = scenario.spec.dimensionless
         self.units = sweep_units(spec, dimless)
         check = _case_check(scenario, spec) if spec.paths else None
-        self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, self.units,
-                                                                       check)
+        # messages name a path's unit as the scenario file writes it ("kg m2"), the file the CF way
+        said = {**self.units, **{k: v for k, v in spec.paths.items() if v is not None}}
+        self.values, self.attitude_axis, self.resampled = draw_samples(spec, self.seed, self.nominal, said, check)
         h = hashlib.sha256(f"{FORMAT}\nsampling {SAMPLING_VERSION}\n{self.seed}\n{self.cases}\n".encode()
                            + scenario.text.encode())
         self.fingerprint = h.hexdigest()[:32]

@@ -74,9 +74,9 @@ def test_chunking_does_not_change_a_bit(swept):
 
 def test_path_coordinates_carry_key_units_and_long_name(swept):
     _, ds = swept
-    for coord, key, unit in (("body_mass", "body.mass", "kg"), ("body_inertia_2", "body.inertia[2]", "kg m2"),
+    for coord, key, unit in (("body_mass", "body.mass", "kg"), ("body_inertia_2", "body.inertia[2]", "kg m^2"),
                              ("orbit_position_0", "orbit.position[0]", "km"),
-                             ("orbit_impulses_0_delta_v_1", "orbit.impulses[0].delta_v[1]", "m/s")):
+                             ("orbit_impulses_0_delta_v_1", "orbit.impulses[0].delta_v[1]", "m s^-1")):
         a = ds[coord].attrs
         assert ds[coord].dims == ("case",)
         assert a["scenario_key"] == key and a["units"] == unit and key in a["long_name"]

@@ -63,10 +63,10 @@ def test_bdot_gain_rate_and_inertia_by_path():
     ds = sw.compute()
     _each_case_is_its_single_run(sw, ds)
     c = ds["control_gain"]
-    assert c.attrs["scenario_key"] == "control.gain" and c.attrs["units"] == "A m2 s / T"
+    assert c.attrs["scenario_key"] == "control.gain" and c.attrs["units"] == "m^2 A s T^-1"
     assert "control.gain" in c.attrs["long_name"]
     assert np.all(np.abs(c.values - 4e4) < 5e4)  # the nominal gain is the mean
-    assert ds["initial_omega_0"].attrs["units"] == "deg/s"  # the key's unit as written in the file
+    assert ds["initial_omega_0"].attrs["units"] == "degree s^-1"  # the key's unit (deg/s), in the CF spelling
     assert np.all(np.abs(ds["initial_omega_0"].values) <= np.degrees(0.08))
 
 
