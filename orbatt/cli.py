@@ -83,7 +83,7 @@ def _parser():
     e.add_argument("--time-system", default="UTC", metavar="S", help="UTC (default), TAI, TT, TDB, TCB or TCG; "
                    "TDB/TCB epochs differ between astropy and Orekit by tens of microseconds")
     e.add_argument("--ref-frame", metavar="NAME", help="REF_FRAME_A: the inertial frame of your orbit elements "
-                   "(default EME2000; RTN for q_orbital)")
+                   "(default GCRF, orbatt's inertial frame; RTN for q_orbital)")
 
     pl = sub.add_parser("plot", help="write PNG figures of a result file (an ensemble: every case)")
     pl.add_argument("file")

@@ -86,7 +86,7 @@ def test_run_writes_the_aem_of_the_result(result):
     ds = orbatt.open_dataset(nc, load=True)
     seg = A.read_aem(aem).segments[0]
     q, frame = seg.body_attitude
-    assert frame == "EME2000" and seg.metadata["TIME_SYSTEM"] == "UTC"
+    assert frame == "GCRF" and seg.metadata["TIME_SYSTEM"] == "UTC"  # S is GCRS with an epoch (issue 35)
     assert np.array_equal(q, ds["q"].values)                      # bit for bit
     np.testing.assert_allclose(seg.seconds_since(EPOCH), ds["elapsed"].values, rtol=0, atol=1e-9)
     assert A.is_orbatt_aem(aem) and not A.is_orbatt_aem(nc)

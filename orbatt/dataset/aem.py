@@ -35,6 +35,13 @@ Example (90 degrees, tested): a body turned by +90 degrees about ``s3`` (so ``b1
 0.7071067811865476`` with ``QUATERNION_TYPE = FIRST``; Orekit reads it as the rotation taking
 ``s2`` (A components) to ``(1, 0, 0)`` (B components).
 
+The inertial frame: a Dataset with an epoch (the AEM needs one) has astropy's GCRS as its ``S``
+(``docs/design.md`` §1, §11: TLE states rotated TEME -> GCRS, the Sun, the Earth's fields and
+ground sites given in GCRS), so ``REF_FRAME_A`` is ``GCRF`` by default, the Geocentric Celestial
+Reference Frame of the CCSDS/SANA frame names (504.0-B-2 annex; Orekit reads it as its GCRF). Not
+``EME2000`` (the mean equator and equinox of J2000, 17-23 mas of frame bias away) nor ``ICRF``
+(barycentric: the same axes, another origin).
+
 The attitude relative to the orbital frame, ``q_orbital`` (``B`` relative to
 ``O`` = radial, transverse, normal), is written the same way with ``REF_FRAME_A = RTN``.
 
@@ -141,15 +148,15 @@ def write_aem(ds, path=None, *, attitude="q", case=None, object_name="SATELLITE"
         (:func:`orbatt.dataset.check_output_path` with ``ours=is_orbatt_aem``).
     attitude : {"q", "q_orbital"}
         ``"q"``: the body relative to the inertial frame ``S`` (default frame name
-        ``EME2000``); ``"q_orbital"``: relative to the orbital frame (default ``RTN``).
+        ``GCRF``); ``"q_orbital"``: relative to the orbital frame (default ``RTN``).
     case : int, optional
         The ensemble member to write (required for ensembles).
     object_name, object_id, center_name : str
         Metadata (``OBJECT_ID`` is the international designator where there is one).
     ref_frame_a : str, optional
-        Name of orbatt's reference frame in the file. orbatt does not know which inertial
-        frame ``S`` is: give the one your orbit elements refer to (``EME2000``, ``ICRF``,
-        ``GCRF`` ...).
+        Name of orbatt's reference frame in the file: by default ``GCRF`` for ``q`` (orbatt's
+        ``S`` is astropy's GCRS whenever there is an epoch, and an AEM needs one), ``RTN`` for
+        ``q_orbital``. Give another name only to relabel: nothing is rotated.
     ref_frame_b : str
         The body frame (``SC_BODY_1``).
     time_system : {"UTC", "TAI", "TT", "TDB", "TCB", "TCG"}
@@ -188,7 +195,7 @@ def write_aem(ds, path=None, *, attitude="q", case=None, object_name="SATELLITE"
     if attitude not in ds:
         raise InputError(f"attitude: the dataset has no {attitude!r} (q_orbital needs an orbit)")
     if ref_frame_a is None:
-        ref_frame_a = "EME2000" if attitude == "q" else "RTN"
+        ref_frame_a = "GCRF" if attitude == "q" else "RTN"  # S = GCRS with an epoch (design.md §11)
     for name, value in (("object_name", object_name), ("object_id", object_id), ("center_name", center_name),
                         ("ref_frame_a", ref_frame_a), ("ref_frame_b", ref_frame_b), ("originator", originator),
                         *((f"comments[{k}]", c) for k, c in enumerate(comments))):

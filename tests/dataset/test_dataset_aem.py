@@ -52,7 +52,7 @@ def test_ninety_degree_example_pins_the_convention():
     ds = _spin_dataset(q90, rate=0.0, n=3)
     text = aem.write_aem(ds)
     meta = _meta(text)
-    assert meta["REF_FRAME_A"] == "EME2000" and meta["REF_FRAME_B"] == "SC_BODY_1"
+    assert meta["REF_FRAME_A"] == "GCRF" and meta["REF_FRAME_B"] == "SC_BODY_1"
     assert meta["ATTITUDE_DIR"] == "A2B" and meta["QUATERNION_TYPE"] == "FIRST"
     assert meta["ATTITUDE_TYPE"] == "QUATERNION" and meta["TIME_SYSTEM"] == "UTC"
     first = _data_lines(text)[0].split()
@@ -94,10 +94,10 @@ def test_round_trip(qtype, time_system, tmp_path):
     (seg,) = msg.segments
     assert seg.metadata["OBJECT_NAME"] == "TEST SAT" and seg.metadata["CENTER_NAME"] == "EARTH"
     assert seg.metadata["TIME_SYSTEM"] == time_system
-    assert seg.frame_a == "EME2000" and seg.frame_b == "SC_BODY_1"
+    assert seg.frame_a == "GCRF" and seg.frame_b == "SC_BODY_1"
     assert seg.q.tobytes() == ds["q"].values.tobytes()  # bit for bit
     q_body, ref = seg.body_attitude
-    assert ref == "EME2000" and np.array_equal(q_body, ds["q"].values)
+    assert ref == "GCRF" and np.array_equal(q_body, ds["q"].values)
     assert np.allclose(seg.seconds_since(ds.attrs["epoch"]), ds["elapsed"].values, rtol=0, atol=2e-9)
     assert seg.seconds_since(ds.orbatt.epoch)[0] == pytest.approx(0.0, abs=1e-9)
     # the text itself is also accepted
@@ -206,3 +206,27 @@ def test_old_module_name_still_works():
 
     assert read_aem is aem.read_aem and write_aem is aem.write_aem
     assert orbatt.read_aem is aem.read_aem
+
+
+def test_a_gcrs_run_writes_ref_frame_gcrf():
+    """The frame a run's ``S`` is (issue 35 item 3): with an epoch orbatt's inertial frame is
+    astropy's GCRS (a TLE state rotated TEME -> GCRS; ``docs/design.md`` §11), the CCSDS/SANA
+    ``GCRF``, not ``EME2000`` (the J2000 mean equator and equinox, a frame bias away);
+    ``q_orbital`` stays ``RTN``; ``ref_frame_a`` relabels."""
+    import json
+    import warnings
+    from pathlib import Path
+
+    from orbatt.scenario import Scenario, parse
+
+    text = (Path(__file__).resolve().parents[2] / "scenarios" / "iss-tle-gravity-gradient.toml").read_text()
+    text = re.sub(r"^t_end = .*$", 't_end = "300 s"', text, flags=re.M)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = Scenario(parse(text, "iss.toml")).run()
+    assert json.loads(ds.attrs["orbit"])["frame"] == "GCRS"
+    seg = aem.read_aem(aem.write_aem(ds)).segments[0]
+    q, frame = seg.body_attitude
+    assert seg.frame_a == frame == "GCRF" and np.array_equal(q, ds["q"].values)
+    assert aem.read_aem(aem.write_aem(ds, attitude="q_orbital")).segments[0].frame_a == "RTN"
+    assert aem.read_aem(aem.write_aem(ds, ref_frame_a="ICRF")).segments[0].frame_a == "ICRF"
