@@ -8,7 +8,15 @@ orbatt.cli``), warm: one run first with ``ORBATT_COLD_START=compile`` fills numb
 Earth-orientation cache, then the median (and min, max) wall time of ``--repeats`` runs, each a
 new process; and the import of ``orbatt.cli`` alone. The last column is the integration's share
 of the wall time: the file's ``integration_stats`` ``wall_time_s`` (the compiled loop) over the
-process's wall time, median over the runs. With ``--baseline TREE`` the same
+process's wall time, median over the runs. The trivial run (``paper-torque-free``, :data:`TRIVIAL`)
+is timed too: its absolute wall time, each scenario's ratio to it (issue 34 item 6: the disturbed
+day and the B-dot detumble <= 1.5x the trivial run; the trivial run itself <= 1 s), and its
+breakdown, from a probe process (:data:`PHASES`) that does what ``orbatt run`` does with a clock
+between the steps: interpreter start (``python -c pass``), imports (``orbatt.cli``, the Dataset
+and scenario packages, numba), set-up (scenario read and checked, output path checked),
+integration (``propagate``: the compiled loop and numba's load of the cached kernels), Dataset
+(the result's content: derived variables), write (the NetCDF file), after (the warm stamp).
+With ``--baseline TREE`` the same
 commands run, interleaved run by run, with ``TREE``'s ``orbatt`` package first on
 ``PYTHONPATH`` (another checkout, e.g. ``main``), and the table shows the ratio. Interleaving
 keeps the two columns comparable on a loaded machine; compare medians, not single runs.
@@ -30,6 +38,42 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ("cubesat-3u-disturbances", "cubesat-bdot-detumble", "lvlh-hold-wheels")
+#: the trivial run every other is compared with (and whose time is broken down)
+TRIVIAL = "paper-torque-free"
+#: the breakdown probe: ``orbatt run``'s steps (orbatt/cli.py ``_run``) with a clock between them
+PHASES = """
+import json, sys, time
+t0 = time.perf_counter()
+scenario, out = sys.argv[1], sys.argv[2]
+from orbatt import cli, coldstart
+from orbatt.dataset import write_netcdf
+from orbatt.scenario import load_scenario
+import orbatt.scenario.load as load
+import numba
+t1 = time.perf_counter()
+warm = coldstart.plan(scenario) is None
+sc = load_scenario(scenario)
+cli._output_path(type("Args", (), {"output": out})(), sc)
+t2 = time.perf_counter()
+spent = []
+propagate = load.propagate
+def timed(*a, **k):
+    s = time.perf_counter()
+    try:
+        return propagate(*a, **k)
+    finally:
+        spent.append(time.perf_counter() - s)
+load.propagate = timed
+content = sc.run_content()
+t3 = time.perf_counter()
+write_netcdf(content, out)
+t4 = time.perf_counter()
+coldstart.mark_warm(scenario)
+t5 = time.perf_counter()
+print(json.dumps({"warm": warm, "import": t1 - t0, "set-up": t2 - t1, "integration": spent[0],
+                  "Dataset": t3 - t2 - spent[0], "write": t4 - t3, "after": t5 - t4}))
+"""
+PHASE_NAMES = ("interpreter", "import", "set-up", "integration", "Dataset", "write", "after")
 
 
 def tree_env(tree, baseline):
@@ -74,6 +118,21 @@ def integration_time(path):
         return float(json.loads(f.getncattr("integration_stats"))["wall_time_s"])
 
 
+def phases(tree, out, cwd, baseline=False):
+    """The trivial run's breakdown (s): :data:`PHASES` in a fresh process, and the interpreter's
+    own start (``python -c pass``) beside it."""
+    import json
+
+    env = tree_env(tree, baseline)
+    w, _ = wall([sys.executable, "-c", "pass"], env, cwd)
+    r = subprocess.run([sys.executable, "-c", PHASES, str(ROOT / "scenarios" / f"{TRIVIAL}.toml"), out], env=env,
+                       cwd=cwd, check=True, capture_output=True, text=True)
+    d = json.loads(r.stdout.strip().splitlines()[-1])
+    if not d.pop("warm"):
+        raise SystemExit(f"{TRIVIAL}: no warm stamp; the breakdown would time an interpreted run")
+    return {"interpreter": w, **d}
+
+
 def import_argv(tree, baseline=False):
     return [sys.executable, "-c", "import orbatt.cli"], tree_env(tree, baseline)
 
@@ -83,30 +142,39 @@ def main():
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--baseline", help="another checkout whose orbatt/ to time beside this one")
     ap.add_argument("--scenarios", nargs="*", default=list(SCENARIOS))
+    ap.add_argument("--cwd", help="the folder the processes run in (default: a temporary folder; give a clone's "
+                                  "root to time what a user there sees)")
     args = ap.parse_args()
+    args.scenarios = [TRIVIAL, *[s for s in args.scenarios if s != TRIVIAL]]
     trees = {"this": ROOT}
     if args.baseline:
         trees["baseline"] = Path(args.baseline).resolve()
     times = {(name, s): [] for name in trees for s in [*args.scenarios, "import orbatt.cli"]}
     cpu = {key: [] for key in times}
     share = {s: [] for s in args.scenarios}
+    parts = {name: {p: [] for p in PHASE_NAMES} for name in trees}
     with tempfile.TemporaryDirectory() as tmp:
         out = str(Path(tmp) / "x.nc")
+        cwd = args.cwd or tmp
         for s in args.scenarios:            # warm: compiled kernels cached, stamps written
             for name, tree in trees.items():
                 argv, env = command(tree, s, out, name == "baseline")
-                subprocess.run(argv, env={**env, "ORBATT_COLD_START": "compile"}, cwd=tmp, check=True,
-                               stdout=subprocess.DEVNULL)
+                for first in (True, False):  # compiled and stamped, then one plain warm run
+                    subprocess.run(argv, env={**env, "ORBATT_COLD_START": "compile"} if first else env, cwd=cwd,
+                                   check=True, stdout=subprocess.DEVNULL)
         for _ in range(args.repeats):
             for s in [*args.scenarios, "import orbatt.cli"]:
                 for name, tree in trees.items():
                     base = name == "baseline"
                     argv, env = import_argv(tree, base) if s.startswith("import") else command(tree, s, out, base)
-                    w, c = wall(argv, env, tmp)
+                    w, c = wall(argv, env, cwd)
                     times[name, s].append(w)
                     cpu[name, s].append(c)
                     if name == "this" and not s.startswith("import"):
                         share[s].append(integration_time(out) / times[name, s][-1])
+            for name, tree in trees.items():
+                for p, v in phases(tree, out, cwd, name == "baseline").items():
+                    parts[name][p].append(v)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     for what, table in (("wall time", times), ("CPU time (user + system)", cpu)):
         print(f"orbatt run, warm, {what} of a fresh process (s): median [min, max] of {args.repeats}; "
@@ -127,6 +195,21 @@ def main():
                 row += f"   {statistics.median(share[s]):20.0%}"
             print(row)
         print()
+    print(f"ratio to the trivial run ({TRIVIAL}), median wall times (goal of issue 34: <= 1.5x; the trivial run "
+          "itself <= 1 s)")
+    for s in args.scenarios[1:]:
+        print(f"{s:28s}" + "".join(f"{statistics.median(times[name, s]) / statistics.median(times[name, TRIVIAL]):26.2f}"
+                                   for name in trees))
+    print()
+    print(f"{TRIVIAL}: where the time goes (s, median of {args.repeats} probe processes; on a loaded machine "
+          "the wall time above exceeds their sum: compare with the CPU time)")
+    print(f"{'':28s}" + "".join(f"{name:>26s}" for name in trees))
+    for p in PHASE_NAMES:
+        print(f"{p:28s}" + "".join(f"{statistics.median(parts[name][p]):26.3f}" for name in trees))
+    print(f"{'sum':28s}" + "".join(f"{sum(statistics.median(parts[name][p]) for p in PHASE_NAMES):26.3f}"
+                                   for name in trees))
+    for what, table in (("wall time (orbatt run)", times), ("CPU time (orbatt run)", cpu)):
+        print(f"{what:28s}" + "".join(f"{statistics.median(table[name, TRIVIAL]):26.3f}" for name in trees))
 
 
 if __name__ == "__main__":
