@@ -15,6 +15,10 @@ since the start; ``axis`` 1..3 of the frame named by ``frame``)::
     angular_momentum_total      r x p + both spins, inertial (kg m^2 s^-1), conserved
     orbit_a, orbit_e, orbit_i,  osculating elements of the relative orbit about G (M1 + M2)
     orbit_period
+    mean_period                 the mean period of the mutual orbit (s): the unwrapped osculating
+                                mean longitude's advance over a window of one mean period
+                                (attributes ``method``, ``window_s``; NaN within half a window
+                                of either end)
     q_norm_error, qQ            the secondary's constraint residuals |q| - 1 and q.Q
     euler_313                   the secondary's 3-1-3 Euler angles (for ``orbatt plot``)
 """
@@ -32,7 +36,7 @@ from ..dataset.build import (AXIS_INDEX, AXIS_LABELS, EULER_313_LABELS, QUAT_IND
 from ..dataset.content import Content, Var
 from ..dataset.timeaxis import cf_time_attrs, elapsed_attrs
 from ..units import INTERNAL_UNITS as UN
-from .system import osculating_elements
+from .system import MEAN_PERIOD_METHOD, mean_longitude, mean_period, osculating_elements
 
 __all__ = ["binary_content", "binary_dataset", "describe", "potential_attr"]
 
@@ -81,6 +85,7 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
     Q = Y[:, 10:14].copy()
     E, L, om2, om1 = km.evaluate(Y, c)
     a, e, inc, period = osculating_elements(pos, vel, s.gm)
+    mean_p, window = mean_period(t, mean_longitude(pos, vel, s.gm))
     norm_err, qQ = cn.constraint_residuals(q, Q)
     td, vd, qd = ("time",), ("time", "axis"), ("time", "quat")
     coords = {
@@ -125,6 +130,9 @@ def binary_content(traj, *, scenario_text=None, title=None) -> Content:
         "orbit_i": _var(td, inc, "rad", "osculating inclination of the relative orbit to the inertial s1-s2 plane"),
         "orbit_period": _var(td, period, "s", "osculating Keplerian period 2 pi sqrt(a^3 / (G (M1 + M2))) (point masses: "
                               "the mean period differs by the bodies' oblateness)"),
+        "mean_period": _var(td, mean_p, "s", "mean period of the mutual orbit, from the unwrapped mean longitude over a "
+                            "window of one mean period (the period an observer measures, e.g. DART's -33 min; the "
+                            "osculating orbit_period differs)", method=MEAN_PERIOD_METHOD, window_s=window),
         "q_norm_error": _var(td, norm_err, "1", "constraint residual |q| - 1 (secondary)"),
         "qQ": _var(td, qQ, UN["momentum"], "constraint residual q.Q (secondary)"),
     })

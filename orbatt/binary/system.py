@@ -22,7 +22,8 @@ from ..body import check_triangle
 from ..core import mutual as km
 from ..errors import InputError
 
-__all__ = ["BinarySystem", "G_KM", "POTENTIALS", "body_radius", "rtn_basis", "osculating_elements"]
+__all__ = ["BinarySystem", "G_KM", "POTENTIALS", "body_radius", "rtn_basis", "osculating_elements", "mean_longitude",
+           "mean_period", "MEAN_PERIOD_METHOD"]
 
 #: the gravitational constant in km^3 kg^-1 s^-2 (astropy's CODATA value)
 G_KM = float(const.G.to_value(u.km**3 / u.kg / u.s**2))
@@ -66,6 +67,90 @@ def osculating_elements(r, v, gm):
     e = np.linalg.norm(evec, axis=-1)
     i = np.arccos(np.clip(h[:, 2] / hn, -1.0, 1.0))
     return a, e, i, period
+
+
+def mean_longitude(r, v, gm):
+    """The osculating mean longitude ``lambda = varpi + M`` (rad, unwrapped along the rows) of the
+    relative orbit ``r (N, 3)`` (km), ``v (N, 3)`` (km/s) about ``gm`` (km^3 s^-2).
+
+    Computed in the equinoctial frame of the orbit plane (no singularity at ``e = 0`` or
+    ``i = 0``; a retrograde orbit is measured in the direction of its motion): ``L`` the true
+    longitude, ``varpi`` that of the eccentricity vector, ``M`` the mean anomaly of the true
+    anomaly ``L - varpi``. On a Keplerian orbit it grows exactly as ``n t``; NaN from the first
+    unbound state on.
+    """
+    r = np.atleast_2d(np.asarray(r, dtype=np.float64))
+    v = np.atleast_2d(np.asarray(v, dtype=np.float64))
+    h = np.cross(r, v)
+    hh = h / np.linalg.norm(h, axis=-1)[:, None]
+    hh = np.where(hh[:, 2:3] < 0, -hh, hh)  # a retrograde orbit: the plane's other normal
+    p = hh[:, 0] / (1.0 + hh[:, 2])
+    q = -hh[:, 1] / (1.0 + hh[:, 2])
+    s = 1.0 + p * p + q * q
+    f = np.stack([1.0 - p * p + q * q, 2.0 * p * q, -2.0 * p], axis=-1) / s[:, None]
+    g = np.stack([2.0 * p * q, 1.0 + p * p - q * q, 2.0 * q], axis=-1) / s[:, None]
+    rn = np.linalg.norm(r, axis=-1)
+    evec = np.cross(v, h) / gm - r / rn[:, None]
+    e = np.linalg.norm(evec, axis=-1)
+    true_long = np.arctan2(np.sum(r * g, axis=-1), np.sum(r * f, axis=-1))
+    varpi = np.arctan2(np.sum(evec * g, axis=-1), np.sum(evec * f, axis=-1))
+    nu = true_long - varpi
+    sign = np.sign(np.sum(h * hh, axis=-1))  # +1 prograde in (f, g), -1 retrograde
+    nu = sign * nu
+    with np.errstate(invalid="ignore"):
+        ecc = np.arctan2(np.sqrt(1.0 - e * e) * np.sin(nu), e + np.cos(nu))
+    mean_anom = ecc - e * np.sin(ecc)
+    centre = np.angle(np.exp(1j * (nu - mean_anom)))  # nu - M in (-pi, pi]: 0 on a circle
+    lam = true_long - sign * centre
+    bad = ~np.isfinite(lam) | (e >= 1.0)
+    if bad.any():
+        lam = lam.copy()
+        lam[int(np.argmax(bad)):] = np.nan
+    ok = np.isfinite(lam)
+    lam[ok] = np.unwrap(lam[ok])
+    return lam
+
+
+#: how :func:`mean_period` measures (the ``method`` attribute of ``mean_period``)
+MEAN_PERIOD_METHOD = ("2 pi W / |lambda(t + W/2) - lambda(t - W/2)|: the advance of the unwrapped osculating mean "
+                      "longitude lambda (about G (M1 + M2)) over a window W centred on t (lambda interpolated "
+                      "linearly between outputs), W = one mean period of the whole run (2 pi (t_end - t_0) / "
+                      "|lambda_end - lambda_0|); NaN where the window does not fit in the run. Periodic terms of "
+                      "period W / k cancel; on a Keplerian orbit it equals the osculating period")
+
+
+def mean_period(t, lam):
+    """The mean period of the mutual orbit at each output time and the window (s).
+
+    Parameters
+    ----------
+    t : ndarray (N,)
+        Output times (s).
+    lam : ndarray (N,)
+        The unwrapped mean longitude (:func:`mean_longitude`, rad).
+
+    Returns
+    -------
+    period : ndarray (N,)
+        :data:`MEAN_PERIOD_METHOD`: ``2 pi W / |lambda(t + W/2) - lambda(t - W/2)|``; NaN where
+        ``[t - W/2, t + W/2]`` leaves the run (or a state is unbound).
+    window : float
+        ``W`` (s): one mean period over the whole run (NaN without one whole window).
+    """
+    t = np.asarray(t, dtype=np.float64)
+    lam = np.asarray(lam, dtype=np.float64)
+    out = np.full(t.shape, np.nan)
+    if t.size < 2 or not np.all(np.isfinite(lam)) or lam[-1] == lam[0]:
+        return out, float("nan")
+    span = t[-1] - t[0]
+    window = 2.0 * np.pi * span / abs(lam[-1] - lam[0])
+    inside = (t - 0.5 * window >= t[0]) & (t + 0.5 * window <= t[-1])
+    if window > span or not inside.any():
+        return out, float(window)
+    tk = t[inside]
+    d = np.interp(tk + 0.5 * window, t, lam) - np.interp(tk - 0.5 * window, t, lam)
+    out[inside] = 2.0 * np.pi * window / np.abs(d)
+    return out, float(window)
 
 
 def _masses(value, name):

@@ -24,6 +24,7 @@ BINARY_OUTPUTS = {
     "final_orbit": ("orbit_a_final", "orbit_e_final", "orbit_i_final", "orbit_period_final", "min_separation"),
     "conservation": ("max_energy_error", "max_angular_momentum_error"),
     "max_libration": ("max_libration_angle",),
+    "mean_period": ("mean_period_initial", "mean_period_final"),
 }
 BINARY_DEFAULT_OUTPUTS = tuple(BINARY_OUTPUTS)
 #: the keys of [sweep] a binary takes

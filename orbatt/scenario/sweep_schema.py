@@ -64,7 +64,7 @@ window              time                    the last orbit, else the last 10 % o
 OUTPUTS = tuple(SWEEP_OUTPUTS)
 SWEEP_KEY_DOCS["outputs"] = SWEEP_KEY_DOCS["outputs"][:2] + (
     "per-case outputs, of " + ", ".join(f"'{k}'" for k in OUTPUTS) + " (each in the outputs table below); a binary "
-    "asteroid's: 'final_state', 'final_orbit', 'conservation', 'max_libration' (all by default)",)
+    "asteroid's: 'final_state', 'final_orbit', 'conservation', 'max_libration', 'mean_period' (all by default)",)
 for _key in THRESHOLDS:  # what each threshold measures, and the outputs that read it
     _d, _default, _meaning = SWEEP_KEY_DOCS[_key]
     _users = " or ".join(f"'{o}'" for o in users_of(_key))

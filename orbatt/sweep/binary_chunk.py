@@ -102,6 +102,12 @@ def _case_outputs(sc, ds, outs):
     if "max_libration" in outs:
         ang = libration_angle(np.asarray(ds["q"].values), np.asarray(ds["position"].values))
         out["max_libration_angle"] = (float(np.max(ang)), "rad")
+    if "mean_period" in outs:
+        p = np.asarray(ds["mean_period"].values)
+        ok = np.flatnonzero(np.isfinite(p))
+        first, last = (float(p[ok[0]]), float(p[ok[-1]])) if ok.size else (np.nan, np.nan)
+        out["mean_period_initial"] = (first, ds["mean_period"].attrs["units"])
+        out["mean_period_final"] = (last, ds["mean_period"].attrs["units"])
     return out
 
 
@@ -126,6 +132,12 @@ def _variables(sc, outs):
     if "max_libration" in outs:
         v["max_libration_angle"] = (), ("largest angle between the secondary's body axis 1 and the line of centres "
                                         "over the output times")
+    if "mean_period" in outs:
+        for name, which in (("mean_period_initial", "first (its window starting at the first output)"),
+                            ("mean_period_final", "last (its window ending at the last output)")):
+            v[name] = (), (f"mean period of the mutual orbit, the {which} value of the run's mean_period (unwrapped "
+                           "mean longitude over one mean period; NaN for a run shorter than that); final - initial is "
+                           "the change an impulse between the windows makes")
     return v
 
 
@@ -202,4 +214,5 @@ def _default_unit(name):
     """The unit of an output no case of the chunk computed (all failed): as a run writes it."""
     return {"position_final": "km", "velocity_final": "km s^-1", "omega_final": "rad s^-1",
             "omega_primary_final": "rad s^-1", "orbit_a_final": "km", "orbit_i_final": "rad", "orbit_period_final": "s",
-            "min_separation": "km", "max_libration_angle": "rad"}.get(name, "1")
+            "min_separation": "km", "max_libration_angle": "rad", "mean_period_initial": "s",
+            "mean_period_final": "s"}.get(name, "1")
