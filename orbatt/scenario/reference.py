@@ -71,6 +71,12 @@ def markdown() -> str:
         if table == "sweep":
             continue
         lines += [f"## `[{table}]`", ""]
+        if table == "control":
+            lines += ["Needs an `[orbit]` and `[potential] kind = \"gravity-gradient\"`: a scenario builds every "
+                      "law along its orbit, and one without them is refused (\"control needs an orbit\"), whatever "
+                      "its target. A torque-free body pointed at an inertial target needs no orbit in the Python API "
+                      "(`orbatt.propagate(body, state, orbatt.TorqueFree(), t, control=orbatt.PDControl(\"inertial\", "
+                      "..., target_q=...))`); scenarios do not take that case yet.", ""]
         lines += _table(((k, KEY_DOCS[table][k]) for k in KEY_DOCS[table] if k in keys), table) + [""]
         if table == "body":
             lines += ["### `[[body.facets]]`", "", "One table per flat plate (environment torques).", ""]
