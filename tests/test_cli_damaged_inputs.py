@@ -139,9 +139,9 @@ def test_a_small_file_declaring_1e8_samples_is_refused_without_reading_them(good
 
 
 def test_values_the_machine_cannot_hold_are_refused_before_loading(good, tmp_path, cli, monkeypatch):
-    from orbatt.dataset import netcdf
+    from orbatt.dataset import file_checks
 
-    monkeypatch.setattr(netcdf, "available_memory", lambda: 10_000)  # a 10 kB machine
+    monkeypatch.setattr(file_checks, "available_memory", lambda: 10_000)  # a 10 kB machine
     with pytest.raises(InputError, match=r"more than this machine can hold \(1e-05 GB available\)"):
         orbatt.open_dataset(good, load=True)
     assert orbatt.open_dataset(good)["q"].shape[0] == 101  # lazily: opened

@@ -20,7 +20,7 @@ from astropy import units as u
 from .. import quaternion as qt
 from ..orbital import lvlh_angles
 from ..units import parse_unit, unit_string
-from .plots import _stored_scenario, _value_in, drift_series, impulse_times, log_values
+from .plots import stored_scenario, value_in, drift_series, impulse_times, log_values
 from .timeaxis import elapsed_values
 
 __all__ = ["FIGURES", "LVLH_LABELS", "LVLH_DEFINITION", "Pointing", "choose_figures", "control_law",
@@ -189,14 +189,14 @@ def wheel_limits(ds):
         return None
     try:
         wheels = json.loads(ds.attrs["wheels"])
-        speed = [_value_in(w.get("max_speed_rad_s"), u.rad / u.s) for w in wheels]
-        torque = [_value_in(w.get("max_torque_N_m"), u.N * u.m) for w in wheels]
+        speed = [value_in(w.get("max_speed_rad_s"), u.rad / u.s) for w in wheels]
+        torque = [value_in(w.get("max_torque_N_m"), u.N * u.m) for w in wheels]
     except (KeyError, TypeError, ValueError, AttributeError):
-        wheels = (_stored_scenario(ds).get("body") or {}).get("wheels")
+        wheels = (stored_scenario(ds).get("body") or {}).get("wheels")
         if not isinstance(wheels, list) or not all(isinstance(w, dict) for w in wheels):
             return None
-        speed = [_value_in(w.get("max_speed"), u.rad / u.s) for w in wheels]
-        torque = [_value_in(w.get("max_torque"), u.N * u.m) for w in wheels]
+        speed = [value_in(w.get("max_speed"), u.rad / u.s) for w in wheels]
+        torque = [value_in(w.get("max_torque"), u.N * u.m) for w in wheels]
     if not wheels or len(wheels) != ds.sizes["wheel"]:
         return None
     return (np.array([np.nan if v is None else v for v in speed], dtype=np.float64),
@@ -206,10 +206,10 @@ def wheel_limits(ds):
 def thresholds(ds):
     """The study thresholds of the stored scenario's ``[sweep]`` table: ``{"detumble_rate":
     rad/s (plain in normalized units) or None, "settling_angle": rad or None}``."""
-    sweep = _stored_scenario(ds).get("sweep")
+    sweep = stored_scenario(ds).get("sweep")
     sweep = sweep if isinstance(sweep, dict) else {}
-    return {"detumble_rate": _value_in(sweep.get("detumble_rate"), u.rad / u.s),
-            "settling_angle": _value_in(sweep.get("settling_angle"), u.rad)}
+    return {"detumble_rate": value_in(sweep.get("detumble_rate"), u.rad / u.s),
+            "settling_angle": value_in(sweep.get("settling_angle"), u.rad)}
 
 
 def reference_rates(ds):

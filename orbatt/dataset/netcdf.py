@@ -44,6 +44,9 @@ from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, UNIT_SYSTEM, orbatt_version, utc_now
 from .content import Content, Var
 from .eclipses import TIME_VARIABLES, decode_variables, file_variables
+from .file_checks import (INTEGER_ATTRS, JSON_ATTRS, available_memory, check_declared_size, check_engine,
+                          check_global_attributes, check_replaceable, check_same_run, is_orbatt_result,
+                          short_text)
 from .netcdf_direct import writable, write_content
 from .timeaxis import LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_values
 
@@ -61,34 +64,6 @@ DEFAULT_CHUNK_TIME = 16384
 #: never written: it decoded to cftime objects with two warnings; now :data:`NOMINAL_EPOCH`)
 LEGACY_NOMINAL_REFERENCE = "0001-01-01 00:00:00"
 _SECONDS = ("seconds", "second", "secs", "sec", "s")
-
-
-def _default_engine():
-    try:
-        import netCDF4  # noqa: F401
-
-        return "netcdf4"
-    except ImportError:
-        pass
-    try:
-        import h5netcdf  # noqa: F401
-        import h5py  # noqa: F401
-
-        return "h5netcdf"
-    except ImportError:
-        raise InputError("NetCDF: neither netCDF4 nor h5netcdf (with h5py) is installed; "
-                         "pip install 'orbatt[io]'") from None
-
-
-def check_engine(engine):
-    """The NetCDF library to use: ``"netcdf4"`` or ``"h5netcdf"`` (``None``: netCDF4 if
-    installed, else h5netcdf); raises :class:`InputError` for another name or neither
-    installed."""
-    engine = _default_engine() if engine is None else str(engine).lower()
-    if engine not in ("netcdf4", "h5netcdf"):
-        raise InputError(f"engine: {engine!r} is not 'netcdf4' or 'h5netcdf' (orbatt files are "
-                         "netCDF-4/HDF5: chunked, compressed and appendable)")
-    return engine
 
 
 def encode(ds: xr.Dataset) -> xr.Dataset:
@@ -217,79 +192,6 @@ def encoding(ds: xr.Dataset, complevel: int, chunk_time: int) -> dict:
                 e.update(zlib=True, complevel=int(complevel), shuffle=True)
         enc[name] = e
     return enc
-
-
-def is_orbatt_result(path) -> bool:
-    """True when ``path`` is a file (or Zarr store) orbatt wrote: a NetCDF file, or a Zarr
-    folder, with the global attribute ``orbatt_version``. Reads the header only; a file that
-    cannot be opened as NetCDF is not an orbatt result."""
-    from pathlib import Path
-
-    p = Path(path)
-    if p.is_dir():
-        for meta in (".zattrs", "zarr.json"):
-            try:
-                if '"orbatt_version"' in (p / meta).read_text(errors="replace"):
-                    return True
-            except OSError:
-                continue
-        return False
-    if not p.is_file():
-        return False
-    try:
-        with open(p, "rb") as f:
-            if f.read(8) != b"\x89HDF\r\n\x1a\n":  # netCDF-4 is HDF5; orbatt writes nothing else
-                return False
-        engine = check_engine(None)
-        if engine == "netcdf4":
-            import netCDF4
-
-            with netCDF4.Dataset(os.fspath(p), "r") as f:
-                return "orbatt_version" in f.ncattrs()
-        import h5netcdf
-
-        with h5netcdf.File(os.fspath(p), "r") as f:
-            return "orbatt_version" in f.attrs
-    except Exception:  # noqa: BLE001 - any failure to read it: not a result
-        return False
-
-
-def check_replaceable(path, *, what="path", zarr=False, ours=None):
-    """Refuse to write over what is at ``path`` unless it is an earlier orbatt result: the check
-    of the CLI's ``-o`` (:func:`orbatt.dataset.check_output_path`), of :func:`write_netcdf` and
-    of ``ds.orbatt.to_netcdf``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    what : str
-        The option, function or field named in the message (``"-o"``, ``"write_netcdf"``).
-    zarr : bool
-        Accept an existing Zarr store (a folder named ``*.zarr``) that orbatt wrote.
-    ours : callable, optional
-        ``ours(path) -> bool``: whether an existing file may be replaced (default
-        :func:`is_orbatt_result`).
-
-    Raises
-    ------
-    InputError
-        ``path`` is a symbolic link (orbatt never writes through a link nor replaces one: the
-        atomic rename would put a file where the link was), a folder (other than an orbatt
-        Zarr store with ``zarr``), or anything else that exists and is not ``ours``: a
-        user's file, a FIFO, another program's NetCDF file.
-    """
-    from pathlib import Path
-
-    s = os.fspath(path)
-    p = Path(s)
-    if p.is_symlink():
-        raise InputError(f"{what}: {s!r} is a symbolic link; orbatt never writes through or replaces a link: "
-                         "give the path of the file it points to, or another path")
-    if p.is_dir() and not (zarr and p.suffix == ".zarr"):
-        raise InputError(f"{what}: {s!r} is a folder; give a file in it such as '{p / 'result.nc'}'")
-    if p.exists() and not (ours or is_orbatt_result)(p):
-        raise InputError(f"{what}: {s!r} exists and is not an orbatt result; orbatt overwrites only its own "
-                         "results: give another path or remove that file")
 
 
 def write_netcdf(ds: xr.Dataset, path, *, engine=None, append=False, complevel=1,
@@ -498,7 +400,7 @@ def _append(ds: xr.Dataset, path, engine, name=None):
             if t_new.size > start and t_new[start] <= last:
                 raise InputError(f"append: new samples start at time {float(t_new[start])!r}, not after the "
                                  f"last time {last!r} of {name}; append only later samples")
-        _check_same_run(f, piece, ds.attrs, engine, name)
+        check_same_run(f, piece, ds.attrs, engine, name)
         n = t_new.size - start
         if n <= 0:
             return
@@ -536,61 +438,6 @@ def _append(ds: xr.Dataset, path, engine, name=None):
         put("history", f"{hist}\n{now} orbatt {orbatt_version()}: appended {n} samples".lstrip("\n"))
     finally:
         f.close()
-
-
-#: global attributes that say which run a file holds: samples appended must have the same
-#: (where both the file and the new samples have one)
-SAME_RUN_ATTRS = ("scenario", "potential", "orbit", "unit_system")
-#: dimensions along which appended samples add entries (their variables are not compared)
-_GROWING = ("time", "eclipse")
-
-
-def _shown(values, n=6):
-    flat = np.asarray(values).ravel()
-    text = np.array2string(flat[:n], precision=17, separator=", ")
-    return text[:-1] + ", ...]" if flat.size > n else text
-
-
-def _check_same_run(f, piece, attrs, engine, name):
-    """Refuse samples ``piece`` (file form) of another run than the open file ``f`` holds,
-    naming what differs: a variable's dimensions, shape or ``units``, the values of a variable
-    that does not grow with the samples (``inertia``, the wheels' axes ...), or one of
-    :data:`SAME_RUN_ATTRS` (the scenario text, the potential, the orbit)."""
-    def var_attrs(v):
-        return dict(v.attrs) if engine == "h5netcdf" else {k: v.getncattr(k) for k in v.ncattrs()}
-
-    for vname, var in piece.variables.items():
-        fv = f.variables[vname]
-        kind = np.dtype(var.dtype).kind
-        if kind not in "fiubM":  # labels (text: a character dimension in the file)
-            continue
-        if tuple(fv.dimensions) != tuple(var.dims):
-            raise InputError(f"append: {vname} has dimensions {tuple(fv.dimensions)} in {name} and {tuple(var.dims)} "
-                             "in the new samples; append only samples of the same run")
-        shape_f = tuple(n for d, n in zip(fv.dimensions, fv.shape) if d not in _GROWING)
-        shape_p = tuple(n for d, n in zip(var.dims, var.shape) if d not in _GROWING)
-        if shape_f != shape_p:
-            raise InputError(f"append: {vname} has shape {shape_f} in {name} and {shape_p} in the new samples "
-                             "(other than along time); append only samples of the same run")
-        u_file, u_new = var_attrs(fv).get("units"), var.attrs.get("units")
-        if u_file is not None and u_new is not None and str(u_file) != str(u_new):
-            raise InputError(f"append: {vname} is in {str(u_file)!r} in {name} and in {str(u_new)!r} in the new "
-                             "samples; convert them to the file's units, or write a new file")
-        if any(d in _GROWING for d in var.dims) or kind not in "fiub":
-            continue
-        values = np.asarray(var.values)
-        old = np.asarray(fv[...])
-        if old.shape != values.shape or not np.array_equal(old, values, equal_nan=kind == "f"):
-            unit = "" if u_new is None or str(u_new) == "1" else f" {u_new}"
-            raise InputError(f"append: the new samples are of another run: {vname} is {_shown(old)}{unit} in {name} "
-                             f"and {_shown(values)}{unit} in the new samples; append only samples of the same run")
-    get = (lambda k: f.attrs.get(k)) if engine == "h5netcdf" else (
-        lambda k: f.getncattr(k) if k in f.ncattrs() else None)
-    for key in SAME_RUN_ATTRS:
-        a, b = get(key), attrs.get(key)
-        if a is not None and b is not None and str(a) != str(b):
-            raise InputError(f"append: the new samples are of another run: their global attribute {key!r} differs "
-                             f"from that of {name}; append only samples of the same run")
 
 
 def _sum_stats(a, b):
@@ -711,7 +558,7 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     try:
         ds = xr.open_dataset(name, engine=engine, **kwargs)
     except Exception as exc:  # noqa: BLE001 - the libraries raise OSError, ValueError, KeyError, ...
-        raise InputError(f"{name}: cannot be read as NetCDF ({type(exc).__name__}: {_short(exc)}); the file is "
+        raise InputError(f"{name}: cannot be read as NetCDF ({type(exc).__name__}: {short_text(exc)}); the file is "
                          "damaged or truncated") from None
     if "orbatt_version" not in ds.attrs:
         ds.close()
@@ -726,138 +573,12 @@ def open_dataset(path, *, engine=None, load=False, **kwargs) -> xr.Dataset:
     except (ValueError, TypeError, KeyError, OverflowError, ArithmeticError) as exc:
         ds.close()
         raise InputError(f"{name}: damaged: its variables cannot be decoded ({type(exc).__name__}: "
-                         f"{_short(exc)})") from None
+                         f"{short_text(exc)})") from None
     if load:
         try:
             ds = ds.load()
         except Exception as exc:  # noqa: BLE001
             ds.close()
             raise InputError(f"{name}: damaged: reading its values failed ({type(exc).__name__}: "
-                             f"{_short(exc)})") from None
+                             f"{short_text(exc)})") from None
     return ds
-
-
-#: zlib (deflate) stores at most ~1032 bytes of values in one byte: a file declaring more than this
-#: many bytes of values per byte of file lacks its data (unwritten chunks: a damaged file)
-MAX_COMPRESSION = 2000
-#: declared sizes below this are not compared with the file's size
-_PLAUSIBLE_BELOW = 256 * 2**20
-#: ``open_dataset(load=True)`` refuses a file whose values need more than this share of the
-#: memory available (:func:`available_memory`)
-MEMORY_SHARE = 0.5
-
-
-def available_memory():
-    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; else the free
-    physical pages), or None where it cannot be found."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, AttributeError):
-        return None
-
-
-def _declared(name, engine):
-    """``(bytes of every variable's values as declared, samples along time)`` read from the
-    header of ``name`` alone, or None where the header cannot be read (xarray then says why)."""
-    try:
-        if engine == "netcdf4":
-            import netCDF4
-
-            with netCDF4.Dataset(name, "r") as f:
-                items = [(v.shape, getattr(v.dtype, "itemsize", 8)) for v in f.variables.values()]
-                n = len(f.dimensions["time"]) if "time" in f.dimensions else 0
-        else:
-            import h5netcdf
-
-            with h5netcdf.File(name, "r") as f:
-                items = [(v.shape, getattr(v.dtype, "itemsize", 8)) for v in f.variables.values()]
-                n = f.dimensions["time"].size if "time" in f.dimensions else 0
-    except Exception:  # noqa: BLE001 - the reader below names the problem
-        return None
-    total = sum(float(np.prod(shape, dtype=np.float64)) * max(int(size), 1) for shape, size in items)
-    return total, int(n)
-
-
-def check_declared_size(name, engine, *, load=False):
-    """Refuse, before reading any value, a file whose header declares far more values than it
-    can hold (:data:`MAX_COMPRESSION`: its data are missing) and, with ``load``, one whose
-    values need more than :data:`MEMORY_SHARE` of the available memory; the message names the
-    samples and the sizes."""
-    found = _declared(name, engine)
-    if found is None:
-        return
-    total, n = found
-    size = os.path.getsize(name)
-    if total > _PLAUSIBLE_BELOW and total > MAX_COMPRESSION * size:
-        raise InputError(f"{name}: damaged: it declares {n} samples ({total / 1e9:.3g} GB of values) in "
-                         f"{size / 1e6:.3g} MB, more than compression can hold: its data are missing (a truncated or "
-                         "edited file)")
-    avail = available_memory() if load else None
-    if avail is not None and total > MEMORY_SHARE * avail:
-        raise InputError(f"{name}: {n} samples ({total / 1e9:.3g} GB of values) are more than this machine can "
-                         f"hold ({avail / 1e9:.3g} GB available); open it lazily (orbatt.open_dataset(path, "
-                         "chunks={}) with dask) or select times with xarray")
-
-
-#: global attributes written as JSON text: ``{name: type of the value}`` (:func:`check_global_attributes`)
-JSON_ATTRS = {"method_settings": dict, "integration_stats": dict, "potential": dict, "orbit": dict, "wheels": list,
-              "sweep_parameters": dict, "sweep_outputs": list, "sweep_run": dict}
-#: global attributes that are whole numbers: ``{name: (low, high)}`` (None: unbounded)
-INTEGER_ATTRS = {"integration_complete": (0, 1), "sweep_cases": (0, None), "sweep_samples": (0, None),
-                 "sweep_grid_points": (0, None), "sweep_resampled_cases": (0, None), "sweep_seed": (0, None),
-                 "sweep_output_times": (0, None)}
-
-
-def _integer(value):
-    """The whole number ``value`` holds (an integer, a one-element integer array, or a float
-    with an integer value), else None."""
-    v = np.asarray(value)
-    if v.size != 1 or v.dtype.kind not in "iuf":
-        return None
-    x = v.reshape(()).item()
-    if isinstance(x, float) and not (np.isfinite(x) and x == int(x)):
-        return None
-    return int(x)
-
-
-def check_global_attributes(attrs):
-    """Refuse an orbatt file whose global attributes orbatt reads are damaged (a truncated or
-    edited file): the JSON ones (:data:`JSON_ATTRS`) must hold JSON of their type, the whole
-    numbers (:data:`INTEGER_ATTRS`) whole numbers in their range. Raises
-    :class:`~orbatt.errors.InputError` naming the attribute."""
-    for key, kind in JSON_ATTRS.items():
-        if key not in attrs:
-            continue
-        text = attrs[key]
-        if isinstance(text, bytes):
-            text = text.decode("utf-8", "replace")
-        if not isinstance(text, str):
-            raise InputError(f"global attribute {key!r} is damaged: {_short(repr(text), 60)} is not JSON text")
-        try:
-            value = json.loads(text)
-        except ValueError as exc:
-            raise InputError(f"global attribute {key!r} is damaged: not JSON ({_short(exc, 80)}); the file was "
-                             "truncated or edited: write it again with orbatt") from None
-        if not isinstance(value, kind):
-            raise InputError(f"global attribute {key!r} is damaged: JSON {type(value).__name__}, not a "
-                             f"{'JSON object' if kind is dict else 'JSON list'}")
-    for key, (low, high) in INTEGER_ATTRS.items():
-        if key not in attrs:
-            continue
-        x = _integer(attrs[key])
-        if x is None or x < low or (high is not None and x > high):
-            want = f"{low} or {high}" if high == low + 1 else f"a whole number >= {low}"
-            raise InputError(f"global attribute {key!r} is damaged: {_short(repr(attrs[key]), 60)}, not {want}; the "
-                             "file was truncated or edited: write it again with orbatt")
-
-
-def _short(exc, n=120):
-    text = " ".join(str(exc).split())
-    return text if len(text) <= n else text[:n] + "..."

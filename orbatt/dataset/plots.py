@@ -23,7 +23,7 @@ from .build import EULER_313_LABELS, EULER_321_LABELS
 from .timeaxis import elapsed_unit, elapsed_values
 
 __all__ = ["plot_state", "plot_attitude", "plot_drift", "time_axis", "time_values", "elapsed_scale", "drift_series",
-           "mark_impulses", "impulse_times", "log_values"]
+           "mark_impulses", "impulse_times", "log_values", "stored_scenario", "value_in"]
 
 #: choices of the ``time`` argument of the plots
 TIME_AXES = ("auto", "utc", "orbits", "time", "elapsed")
@@ -132,7 +132,7 @@ def time_axis(ds, time="auto"):
     return t, f"elapsed time [{unit_string(parse_unit(units))}]"
 
 
-def _stored_scenario(ds):
+def stored_scenario(ds):
     """The stored scenario's TOML tables (``scenario`` attribute), read as plain TOML: the run
     validated them; ``{}`` without one or where it does not read."""
     text = ds.attrs.get("scenario")
@@ -146,7 +146,7 @@ def _stored_scenario(ds):
         return {}
 
 
-def _value_in(value, unit):
+def value_in(value, unit):
     """A scenario value (``"6000 rpm"``, or a plain number: already in ``unit``, the
     normalized scenarios' form) in ``unit``, or None where it is not one."""
     if isinstance(value, bool) or value is None:
@@ -172,14 +172,14 @@ def log_values(y):
 def impulse_times(ds):
     """The times (in the Dataset's ``elapsed`` unit) of the stored scenario's impulses
     (``[[orbit.impulses]] time``: the deliberate Delta v of a binary), sorted; empty without."""
-    impulses = ((_stored_scenario(ds).get("orbit") or {}).get("impulses")) or []
+    impulses = ((stored_scenario(ds).get("orbit") or {}).get("impulses")) or []
     unit = u.s if str(ds["elapsed"].attrs.get("units", "s")).strip() not in ("1", "") else None
     out = []
     for imp in impulses if isinstance(impulses, list) else []:
         if isinstance(imp, dict):
             value = imp.get("time")
             t = (float(value) if isinstance(value, (int, float)) and not isinstance(value, bool)
-                 else _value_in(value, unit) if unit is not None else None)
+                 else value_in(value, unit) if unit is not None else None)
             if t is not None:
                 out.append(t)
     return sorted(out)

@@ -4,8 +4,9 @@
 
 A sweep varies such a numeric leaf from case to case; a case's scenario is the file with the
 leaves replaced (:func:`substitute`), written back as TOML (:func:`toml_text`), and that
-scenario's single run defines the case. Nothing here validates a scenario: the schema does,
-on the case's text.
+scenario's single run defines the case. The schema validates the case's text; here only a
+swept path is checked to name a numeric key (:func:`path_unit`), whose default it may take
+(:data:`DEFAULT_LEAVES`).
 """
 from __future__ import annotations
 
@@ -13,7 +14,9 @@ import copy
 import math
 import re
 
-__all__ = ["ALIAS_PATHS", "PATH_PATTERN", "split_path", "resolve", "substitute", "toml_text", "coordinate_name",
+from .. import units as U
+
+__all__ = ["DEFAULT_LEAVES", "FIXED_TABLES", "path_unit", "ALIAS_PATHS", "PATH_PATTERN", "split_path", "resolve", "substitute", "toml_text", "coordinate_name",
            "leaf_quantity"]
 
 #: the named parameters as scenario paths (their values are in internal units)
@@ -156,3 +159,69 @@ def toml_text(data):
     lines = []
     _table(lines, "", data)
     return "\n".join(lines).lstrip("\n") + "\n"
+
+
+#: the value a numeric key takes when the scenario does not write it, as a TOML leaf, by its
+#: table's path without indices and its name (``KEY_DOCS``' numeric defaults): a swept path may
+#: name such a key, its nominal value being the default
+DEFAULT_LEAVES = {("body.facets", "drag_coefficient"): 2.2, ("body.facets", "specular"): 0.0,
+                  ("body.facets", "diffuse"): 0.0, ("body.wheels", "speed"): "0.0 rad / s"}
+
+#: tables whose keys a sweep does not vary: the output times and the method are shared by all cases
+FIXED_TABLES = ("sweep", "integration", "name", "description")
+
+
+def path_unit(ctx, path, data, given=None):
+    """The unit text of the numeric scenario key at ``path`` (None for a plain number), checked:
+    the path exists in ``data``, is not in :data:`FIXED_TABLES`, holds a number (a
+    ``"<number> <unit>"`` string or a plain number), not an epoch; raises
+    :class:`~orbatt.scenario.ScenarioError` naming the path. A plain ``0`` (a zero needs no
+    unit: ``raan = 0``) takes the unit of the parameter's table ``given`` (its first value,
+    mean, low, high or std with a unit), so that it varies by values with units; each case's
+    scenario then checks that unit against the key."""
+    where = f'[sweep.parameters."{path}"]'
+    try:
+        steps = split_path(path)
+    except ValueError as exc:
+        raise ctx.error(where, str(exc)) from None
+    if steps[0] in FIXED_TABLES:
+        raise ctx.error(where, f"[{steps[0]}] is shared by all cases (the output times and the method); vary the keys "
+                               "of [body], [initial], [orbit], [control], [torques], [environment], [primary]")
+    try:
+        leaf = resolve(data or {}, path, DEFAULT_LEAVES)
+    except LookupError as exc:
+        raise ctx.error(where, f"{exc}; give the path of a key the scenario has") from None
+    if isinstance(steps[-1], str) and steps[-1] == "epoch" or (isinstance(leaf, str) and re.match(r"^\s*\d{4}-", leaf)):
+        raise ctx.error(where, f"{leaf!r} is a time (an epoch): time-valued keys do not vary in a sweep yet")
+    if isinstance(leaf, list):
+        raise ctx.error(where, f"holds a list; vary one element, e.g. \"{path}[0]\"")
+    try:
+        _, unit = leaf_quantity(leaf)
+    except ValueError as exc:
+        raise ctx.error(where, f"{exc}: only numeric keys vary") from None
+    if unit is None and not isinstance(leaf, str) and leaf == 0:
+        unit = _given_unit(given)
+    if unit is not None:
+        try:
+            U.parse_unit(unit)
+        except Exception:  # noqa: BLE001 - the scenario's own check names it better
+            raise ctx.error(where, f"{leaf!r} is not a number with a unit: only numeric keys vary") from None
+    return unit
+
+
+def _given_unit(d):
+    """The unit text of the first value with a unit in a parameter's table ``d`` (its values,
+    then mean, low, high, std), or None."""
+    if not isinstance(d, dict):
+        return None
+    vals = d.get("values")
+    cands = (vals if isinstance(vals, list) else []) + [d.get(k) for k in ("mean", "low", "high", "std")]
+    for x in cands:
+        if isinstance(x, str):
+            try:
+                unit = leaf_quantity(x)[1]
+            except ValueError:
+                continue
+            if unit is not None:
+                return unit
+    return None

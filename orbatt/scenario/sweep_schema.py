@@ -8,7 +8,6 @@ dimensionless scenario. Drawing the samples is :mod:`orbatt.sweep.sampling`'s jo
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,7 +15,7 @@ import numpy as np
 from .. import units as U
 from ..dataset import DIMENSIONLESS_UNITS
 from ..units import INTERNAL_UNITS
-from .paths import ALIAS_PATHS, leaf_quantity, resolve, split_path
+from .paths import ALIAS_PATHS, DEFAULT_LEAVES, FIXED_TABLES, path_unit, split_path  # noqa: F401 - re-exported
 from .study_schema import parse_study_keys
 from ..sweep_outputs import DEFAULT_OUTPUTS, OUTPUTS as SWEEP_OUTPUTS, THRESHOLDS, users_of
 from .fields import parse_int, parse_quantity
@@ -299,72 +298,6 @@ def _check_apoapsis(ctx, params, orbit, radius):
     elif d.low is not None and d.low * (1.0 + e_min) < radius:
         raise ctx.error(f"{where} low", f"{d.low:.6g} km with e = {e_min:g}: draws may put the whole orbit inside the "
                                         f"central body (radius {radius:.6g} km); raise low")
-
-
-#: the value a numeric key takes when the scenario does not write it, as a TOML leaf, by its
-#: table's path without indices and its name (``KEY_DOCS``' numeric defaults): a swept path may
-#: name such a key, its nominal value being the default
-DEFAULT_LEAVES = {("body.facets", "drag_coefficient"): 2.2, ("body.facets", "specular"): 0.0,
-                  ("body.facets", "diffuse"): 0.0, ("body.wheels", "speed"): "0.0 rad / s"}
-
-#: tables whose keys a sweep does not vary: the output times and the method are shared by all cases
-FIXED_TABLES = ("sweep", "integration", "name", "description")
-
-
-def path_unit(ctx, path, data, given=None):
-    """The unit text of the numeric scenario key at ``path`` (None for a plain number), checked:
-    the path exists in ``data``, is not in :data:`FIXED_TABLES`, holds a number (a
-    ``"<number> <unit>"`` string or a plain number), not an epoch; raises
-    :class:`~orbatt.scenario.ScenarioError` naming the path. A plain ``0`` (a zero needs no
-    unit: ``raan = 0``) takes the unit of the parameter's table ``given`` (its first value,
-    mean, low, high or std with a unit), so that it varies by values with units; each case's
-    scenario then checks that unit against the key."""
-    where = f'[sweep.parameters."{path}"]'
-    try:
-        steps = split_path(path)
-    except ValueError as exc:
-        raise ctx.error(where, str(exc)) from None
-    if steps[0] in FIXED_TABLES:
-        raise ctx.error(where, f"[{steps[0]}] is shared by all cases (the output times and the method); vary the keys "
-                               "of [body], [initial], [orbit], [control], [torques], [environment], [primary]")
-    try:
-        leaf = resolve(data or {}, path, DEFAULT_LEAVES)
-    except LookupError as exc:
-        raise ctx.error(where, f"{exc}; give the path of a key the scenario has") from None
-    if isinstance(steps[-1], str) and steps[-1] == "epoch" or (isinstance(leaf, str) and re.match(r"^\s*\d{4}-", leaf)):
-        raise ctx.error(where, f"{leaf!r} is a time (an epoch): time-valued keys do not vary in a sweep yet")
-    if isinstance(leaf, list):
-        raise ctx.error(where, f"holds a list; vary one element, e.g. \"{path}[0]\"")
-    try:
-        _, unit = leaf_quantity(leaf)
-    except ValueError as exc:
-        raise ctx.error(where, f"{exc}: only numeric keys vary") from None
-    if unit is None and not isinstance(leaf, str) and leaf == 0:
-        unit = _given_unit(given)
-    if unit is not None:
-        try:
-            U.parse_unit(unit)
-        except Exception:  # noqa: BLE001 - the scenario's own check names it better
-            raise ctx.error(where, f"{leaf!r} is not a number with a unit: only numeric keys vary") from None
-    return unit
-
-
-def _given_unit(d):
-    """The unit text of the first value with a unit in a parameter's table ``d`` (its values,
-    then mean, low, high, std), or None."""
-    if not isinstance(d, dict):
-        return None
-    vals = d.get("values")
-    cands = (vals if isinstance(vals, list) else []) + [d.get(k) for k in ("mean", "low", "high", "std")]
-    for x in cands:
-        if isinstance(x, str):
-            try:
-                unit = leaf_quantity(x)[1]
-            except ValueError:
-                continue
-            if unit is not None:
-                return unit
-    return None
 
 
 def _check_one_spelling(ctx, raw):
