@@ -27,7 +27,7 @@ from .core import model as km
 from .errors import InputError
 
 __all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row",
-           "wheel_axes_span", "reaction_wheel"]
+           "wheel_axes_span", "reaction_wheel", "scalar_value", "flight_period", "PERIOD_RANGE", "command_slots"]
 
 #: a wheel axis or a Sun-pointing axis must have |a| = 1 within this
 AXIS_TOLERANCE = 1e-6
@@ -41,7 +41,7 @@ POINTING_TARGETS = ("sun", "ground")
 ACTUATORS = ("ideal", "wheels")
 
 
-def _value(x, unit, name, *, positive=False, nonnegative=False, allow_none=False):
+def scalar_value(x, unit, name, *, positive=False, nonnegative=False, allow_none=False):
     """A float of ``x`` (Quantity or string, :func:`orbatt.units.strip`) in ``unit``, checked;
     None passes if allowed."""
     if x is None:
@@ -109,18 +109,18 @@ class ReactionWheel:
     def __init__(self, axis, inertia, speed=0.0 * u.rad / u.s, *, max_torque=None, max_speed=None, name=None,
                  friction_coulomb=None, friction_viscous=None, friction_width=None):
         self.axis = _unit_vector(axis, "axis")
-        self.inertia_kg_m2 = _value(inertia, u.kg * u.m**2, "inertia", positive=True)
-        self.speed_rad_s = _value(speed, u.rad / u.s, "speed")
-        self.max_torque_n_m = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
-        self.max_speed_rad_s = _value(max_speed, u.rad / u.s, "max_speed", positive=True, allow_none=True)
+        self.inertia_kg_m2 = scalar_value(inertia, u.kg * u.m**2, "inertia", positive=True)
+        self.speed_rad_s = scalar_value(speed, u.rad / u.s, "speed")
+        self.max_torque_n_m = scalar_value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
+        self.max_speed_rad_s = scalar_value(max_speed, u.rad / u.s, "max_speed", positive=True, allow_none=True)
         if self.max_speed_rad_s is not None and abs(self.speed_rad_s) > self.max_speed_rad_s:
             raise InputError(f"speed: {self.speed_rad_s:.6g} rad/s is above max_speed = {self.max_speed_rad_s:.6g} "
                              "rad/s; lower the initial speed or raise max_speed")
-        self.friction_coulomb = _value(friction_coulomb, u.N * u.m, "friction_coulomb", nonnegative=True,
+        self.friction_coulomb = scalar_value(friction_coulomb, u.N * u.m, "friction_coulomb", nonnegative=True,
                                        allow_none=True)
-        self.friction_viscous = _value(friction_viscous, u.N * u.m * u.s, "friction_viscous", nonnegative=True,
+        self.friction_viscous = scalar_value(friction_viscous, u.N * u.m * u.s, "friction_viscous", nonnegative=True,
                                        allow_none=True)
-        self.friction_width = _value(friction_width, u.rad / u.s, "friction_width", positive=True, allow_none=True)
+        self.friction_width = scalar_value(friction_width, u.rad / u.s, "friction_width", positive=True, allow_none=True)
         if self.friction_width is not None and self.friction_coulomb is None:
             raise InputError("friction_width: only with friction_coulomb (the speed over which it turns)")
         self.name = name
@@ -166,9 +166,9 @@ class ReactionWheel:
 PERIOD_RANGE = (1e-6, 3.2e7)
 
 
-def _period(period):
+def flight_period(period):
     """The flight-software period in s (None: a continuous law), checked."""
-    v = _value(period, u.s, "period", positive=True, allow_none=True)
+    v = scalar_value(period, u.s, "period", positive=True, allow_none=True)
     if v is not None and not PERIOD_RANGE[0] <= v <= PERIOD_RANGE[1]:
         raise InputError(f"period: {v:.6g} s is outside [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}] s; give the flight "
                          "software's rate as its period (e.g. '0.1 s' for 10 Hz), or leave it out for a continuous law")
@@ -183,9 +183,9 @@ def _location(loc):
                          "['43.6 deg', '1.44 deg', '150 m']")
     if isinstance(loc, u.Quantity) or not hasattr(loc, "__len__") or len(loc) != 3:
         raise InputError(f"target_location: expected [latitude, longitude, height], got {loc!r}")
-    lat = _value(loc[0], u.rad, "target_location latitude") if isinstance(loc[0], (u.Quantity, str)) else float(loc[0])
-    lon = _value(loc[1], u.rad, "target_location longitude") if isinstance(loc[1], (u.Quantity, str)) else float(loc[1])
-    h = _value(loc[2], u.m, "target_location height") if isinstance(loc[2], (u.Quantity, str)) else float(loc[2])
+    lat = scalar_value(loc[0], u.rad, "target_location latitude") if isinstance(loc[0], (u.Quantity, str)) else float(loc[0])
+    lon = scalar_value(loc[1], u.rad, "target_location longitude") if isinstance(loc[1], (u.Quantity, str)) else float(loc[1])
+    h = scalar_value(loc[2], u.m, "target_location height") if isinstance(loc[2], (u.Quantity, str)) else float(loc[2])
     if not (abs(lat) <= np.pi / 2 and np.isfinite(lon) and abs(lon) <= 4 * np.pi and -1.2e4 <= h <= 1e5):
         raise InputError(f"target_location: latitude {np.degrees(lat):.6g} deg (within +-90), longitude "
                          f"{np.degrees(lon):.6g} deg (within +-720), height {h:.6g} m (within -12 km .. 100 km)")
@@ -279,14 +279,14 @@ class PDControl:
         if actuator not in ACTUATORS:
             raise InputError(f"actuator: {actuator!r} is not one of 'ideal', 'wheels'")
         self.target, self.actuator = target, actuator
-        self.kp = _value(kp, u.N * u.m, "kp", nonnegative=True)
-        self.kd = _value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
-        self.max_torque = _value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
-        self.period = _period(period)
-        self.max_rate = _value(max_rate, u.rad / u.s, "max_rate", positive=True, allow_none=True)
+        self.kp = scalar_value(kp, u.N * u.m, "kp", nonnegative=True)
+        self.kd = scalar_value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
+        self.max_torque = scalar_value(max_torque, u.N * u.m, "max_torque", positive=True, allow_none=True)
+        self.period = flight_period(period)
+        self.max_rate = scalar_value(max_rate, u.rad / u.s, "max_rate", positive=True, allow_none=True)
         if self.max_rate is not None and not self.kd > 0:
             raise InputError("max_rate: the rate-limited slew needs kd > 0 (the rate loop's gain)")
-        self.ki = _value(ki, u.N * u.m / u.s, "ki", nonnegative=True, allow_none=True)
+        self.ki = scalar_value(ki, u.N * u.m / u.s, "ki", nonnegative=True, allow_none=True)
         self.dump_gain, self.dump_max_dipole = _dumping(actuator, dump_gain, dump_max_dipole)
         self.target_q = self.target_axis = None
         if target == "inertial" and target_q is None:
@@ -410,8 +410,8 @@ class PDControl:
 def _dumping(actuator, gain, max_dipole):
     """``(dump_gain 1/s, dump_max_dipole A m^2)`` of a PD law (None, None: no dumping), checked:
     both or neither, on wheels."""
-    k = _value(gain, 1 / u.s, "dump_gain", positive=True, allow_none=True)
-    mmax = _value(max_dipole, u.A * u.m**2, "dump_max_dipole", positive=True, allow_none=True)
+    k = scalar_value(gain, 1 / u.s, "dump_gain", positive=True, allow_none=True)
+    mmax = scalar_value(max_dipole, u.A * u.m**2, "dump_max_dipole", positive=True, allow_none=True)
     if k is None and mmax is None:
         return None, None
     if k is None:
@@ -444,9 +444,9 @@ class BDotControl:
     law = "bdot"
 
     def __init__(self, gain, max_dipole, *, period=None):
-        self.gain = _value(gain, u.A * u.m**2 * u.s / u.T, "gain", nonnegative=True)
-        self.max_dipole = _value(max_dipole, u.A * u.m**2, "max_dipole", positive=True)
-        self.period = _period(period)
+        self.gain = scalar_value(gain, u.A * u.m**2 * u.s / u.T, "gain", nonnegative=True)
+        self.max_dipole = scalar_value(max_dipole, u.A * u.m**2, "max_dipole", positive=True)
+        self.period = flight_period(period)
 
     def row(self, field_table, wheels=()):
         """The :data:`~orbatt.core.model.BDOT_CONTROL` row with the field along the orbit

@@ -13,13 +13,11 @@ sequence needs a ``period``; the Dataset gets ``mode`` along ``time`` (CF ``flag
 from __future__ import annotations
 
 import copy
-import math
 
 import numpy as np
 from astropy import units as u
 
-from . import units as U
-from .control import PERIOD_RANGE, BDotControl, PDControl
+from .control import BDotControl, PDControl, flight_period, scalar_value
 from .core import control as kc
 from .core import model as km
 from .errors import InputError
@@ -28,18 +26,6 @@ __all__ = ["Mode", "ModeSequence", "MAX_MODES"]
 
 #: most modes of a sequence
 MAX_MODES = 16
-
-
-def _quantity(x, unit, name, *, positive=False):
-    if x is None:
-        return None
-    v = U.strip(x, unit, name)
-    if v.shape != ():
-        raise InputError(f"{name}: expected one value, got {x}")
-    v = float(v)
-    if not (v > 0 if positive else v >= 0) or not math.isfinite(v):
-        raise InputError(f"{name}: {x} must be {'positive' if positive else 'finite and >= 0'}")
-    return v
 
 
 class Mode:
@@ -69,10 +55,10 @@ class Mode:
         if not isinstance(law, (PDControl, BDotControl)):
             raise InputError(f"law: expected a PDControl or BDotControl, got {type(law).__name__}")
         self.name, self.law = name, law
-        self.until_time = _quantity(until_time, u.s, "until_time", positive=True)
-        self.until_rate = _quantity(until_rate, u.rad / u.s, "until_rate", positive=True)
-        self.until_settled = _quantity(until_settled, u.rad, "until_settled", positive=True)
-        self.hold = _quantity(hold, u.s, "hold")
+        self.until_time = scalar_value(until_time, u.s, "until_time", positive=True, allow_none=True)
+        self.until_rate = scalar_value(until_rate, u.rad / u.s, "until_rate", positive=True, allow_none=True)
+        self.until_settled = scalar_value(until_settled, u.rad, "until_settled", positive=True, allow_none=True)
+        self.hold = scalar_value(hold, u.s, "hold", nonnegative=True, allow_none=True)
         if self.until_settled is not None and law.law != "pd":
             raise InputError(f"until_settled: the attitude error is the PD law's (mode {name!r} runs {law.law!r})")
         if self.hold is not None and self.until_rate is None and self.until_settled is None:
@@ -139,9 +125,7 @@ class ModeSequence:
         if period is None:
             raise InputError("period: a mode sequence needs the flight software's period (its transitions are "
                              "decided at its ticks), e.g. period = '1 s'")
-        self.period = _quantity(period, u.s, "period", positive=True)
-        if not PERIOD_RANGE[0] <= self.period <= PERIOD_RANGE[1]:
-            raise InputError(f"period: {self.period:.6g} s is outside [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}] s")
+        self.period = flight_period(period)
         for m in modes:
             if m.law.period is not None and m.law.period != self.period:
                 raise InputError(f"period: mode {m.name!r}'s law runs at {m.law.period:g} s, the sequence at "

@@ -29,7 +29,7 @@ from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, 
                     orbit_radial, terms_at, time_of_s)
 from .model import MOMENTUM_DUMP
 from .kepler import anomaly_of_time
-from .qalg import qconj, qmul, qmul_pure, rotate_inv
+from .qalg import cross, qconj, qmul, qmul_pure, rotate_inv, vadd
 from .torques import gradient_of_torque
 
 # the slot offsets (orbatt.core.control's layouts) as module constants, folded by numba
@@ -151,11 +151,11 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                     for k in range(u.shape[0]):
                         u[k] = y[z0 + k]
                     tb = ctl.wheel_reaction(omega, y, params, w0, u)
-                    app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
+                    app = vadd(app, tb)
                 else:
                     tau = (y[z0], y[z0 + 1], y[z0 + 2])
-                    ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
-                    app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+                    ext = vadd(ext, tau)
+                    app = vadd(app, tau)
                 continue
             aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
             tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y)
@@ -167,10 +167,10 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                     dz[zi + k] = ctl.windup_gate(raw[k], e[k], ki, tmax)
             if wheels:
                 tb = ctl.wheel_torques(tau, omega, y, params, p0, w0, u)
-                app = (app[0] + tb[0], app[1] + tb[1], app[2] + tb[2])
+                app = vadd(app, tb)
             else:
-                ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
-                app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+                ext = vadd(ext, tau)
+                app = vadd(app, tau)
         elif kind == BDOT_CONTROL:
             b_s, bdot_s = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
             if params[p0 + _CTL_PERIOD] > 0.0:
@@ -179,9 +179,9 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 b = rotate_inv(q, b_s)
             else:
                 m, b = ctl.bdot_dipole(q, omega, b_s, bdot_s, params, p0)
-            tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
-            ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
-            app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+            tau = cross(m, b)
+            ext = vadd(ext, tau)
+            app = vadd(app, tau)
         elif kind == MOMENTUM_DUMP:  # magnetorquers unloading the wheels: the external torque m x B(t)
             b4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
             b = rotate_inv(q, (b4[0], b4[1], b4[2]))
@@ -190,9 +190,9 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 m = (y[z0], y[z0 + 1], y[z0 + 2])
             else:
                 m = ctl.dump_dipole(ctl.wheels_momentum(y, params, w0), b, params, p0)
-            tau = (m[1] * b[2] - m[2] * b[1], m[2] * b[0] - m[0] * b[2], m[0] * b[1] - m[1] * b[0])
-            ext = (ext[0] + tau[0], ext[1] + tau[1], ext[2] + tau[2])
-            app = (app[0] + tau[0], app[1] + tau[1], app[2] + tau[2])
+            tau = cross(m, b)
+            ext = vadd(ext, tau)
+            app = vadd(app, tau)
     return ext, app, m
 
 

@@ -86,5 +86,11 @@ def rotate_inv(q, v):
 
 
 @jit_inline
+def vadd(a, b):
+    """``a + b`` of 3-tuples."""
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@jit_inline
 def cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
