@@ -41,11 +41,13 @@ from .core import potentials as kp
 from .dataset.control import mode_column
 from .laws import LAWS, MODE_SEQUENCE, law_of
 from .methods.problem import kernel_spec
+from .pointing import INDEX_KINDS, index_attrs, index_value
 from .units import from_kernel, to_output
 
 __all__ = ["OutputVar", "OutputDim", "DIMS", "Threshold", "SweepOutput", "OUTPUTS", "DEFAULT_OUTPUTS", "NEEDS", "THRESHOLDS", "Case",
            "crossing_time", "refine_crossing", "window_start", "study_series", "target_pointing_error",
-           "study_outputs", "variable_shape", "outputs_markdown", "users_of", "per_component_outputs"]
+           "study_outputs", "variable_shape", "outputs_markdown", "users_of", "per_component_outputs",
+           "POINTING_INDICES", "pointing_index"]
 
 
 @dataclass(frozen=True)
@@ -94,6 +96,9 @@ THRESHOLDS = {
     "detumble_rate": Threshold(U.RATE),
     "settling_angle": Threshold(U.ANGLE, angle=True, high=math.pi, outside="is outside (0, 180] deg"),
     "window": Threshold(U.TIME, required=False),
+    "confidence": Threshold(U.DIMENSIONLESS, angle=True, high=math.nextafter(1.0, 0.0), outside="is outside (0, 1)",
+                            required=False),
+    "stability_window": Threshold(U.TIME),
 }
 
 
@@ -461,6 +466,25 @@ def _not_sun(output):
     return refuse
 
 
+def pointing_index(name, meaning, series, needs=(), keys=("pointing_axis", "pointing_reference")):
+    """The :class:`SweepOutput` of the ECSS pointing index ``name`` (a key of
+    :data:`orbatt.pointing.INDEX_KINDS`: ``ape``, ``rpe``, ``mpe``, and ``ake``, ``rke``, ``mke``
+    of the knowledge error): :func:`orbatt.pointing.index_value` of the error series
+    ``series(case) -> (N,) or (N, 3)`` (rad) at ``[sweep] confidence`` (``docs/pointing-budgets.md``)."""
+    windowed = INDEX_KINDS[name][1]
+
+    def compute(c):
+        return {name: index_value(name, c.t, series(c), c.spec.confidence, c.spec.stability_window, "[sweep] ")}
+
+    return SweepOutput(name, f"{name.upper()}: {meaning}, at confidence over the output times (temporal)",
+                       (OutputVar(name, (), "angle", f"{name.upper()} at the confidence level (temporal "
+                                                     f"interpretation, ECSS-E-ST-60-10C): {meaning}",
+                                  lambda spec: index_attrs(name, spec.confidence, spec.stability_window,
+                                                           spec.requirement.get(name))),),
+                       needs=needs, compute=compute,
+                       keys=("confidence",) + (("stability_window",) if windowed else ()) + ("requirement",) + keys)
+
+
 #: every output that may be asked for, in the order the Dataset and the reference list them
 OUTPUTS = {o.key: o for o in (
     SweepOutput("trajectory", "every case's whole trajectory (as `orbatt run` writes it), along case",
@@ -532,7 +556,15 @@ OUTPUTS = {o.key: o for o in (
                 (OutputVar("mode_entry_time", ("mode_index",), "time",
                            "time each mode of the sequence began (NaN: not entered by the last output)"),),
                 needs=("modes",), compute=_mode_entry_time),
+    pointing_index("ape", "absolute performance error (the pointing error to the law's target, else pointing_axis / "
+                          "pointing_reference)", lambda c: c.pointing_error),
+    pointing_index("rpe", "relative performance error (the pointing error minus its stability window's mean)",
+                   lambda c: c.pointing_error),
+    pointing_index("mpe", "mean performance error (the pointing error's mean over its stability window)",
+                   lambda c: c.pointing_error),
 )}
+#: the outputs that are ECSS pointing indices (they read [sweep] requirement)
+POINTING_INDICES = tuple(o.key for o in OUTPUTS.values() if "requirement" in o.keys)
 DEFAULT_OUTPUTS = ("final_state", "max_pointing_error", "tumbling")
 
 

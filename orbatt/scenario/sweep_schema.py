@@ -17,6 +17,7 @@ from ..dataset import DIMENSIONLESS_UNITS
 from ..units import INTERNAL_UNITS
 from .paths import ALIAS_PATHS, DEFAULT_LEAVES, FIXED_TABLES, path_unit, split_path  # noqa: F401 - re-exported
 from .study_schema import parse_study_keys
+from .pointing_schema import parse_requirement
 from ..sweep_outputs import DEFAULT_OUTPUTS, OUTPUTS as SWEEP_OUTPUTS, THRESHOLDS, users_of
 from .fields import parse_int, parse_quantity
 from ..orbits import R_EARTH
@@ -30,7 +31,8 @@ __all__ = ["SweepSpec", "Distribution", "Parameter", "PARAMETERS", "OUTPUTS", "D
 
 #: keys of the [sweep] table
 SWEEP_KEYS = ("parameters", "samples", "seed", "chunk_size", "outputs", "pointing_axis", "pointing_reference",
-              "tumbling_angle", "on_invalid", "detumble_rate", "settling_angle", "window")
+              "tumbling_angle", "on_invalid", "detumble_rate", "settling_angle", "window", "confidence",
+              "stability_window", "requirement")
 #: what each key of [sweep] is: ``(dimension, default, meaning)`` (``docs/scenarios.md``), written
 #: as a table (:mod:`orbatt.scenario.key_docs`)
 SWEEP_KEY_DOCS = parse_key_docs("""
@@ -58,6 +60,16 @@ settling_angle      angle                   (below)                             
                                                                                                pointing error stays below it
 window              time                    the last orbit, else the last 10 % of the run      span before t_end that
                                                                                                pointing_error_max/_rms summarize
+confidence          plain number in (0, 1)  0.9973                                             the confidence level P_C of the
+                                                                                               pointing indices: each case's
+                                                                                               P_C-quantile over its output times
+                                                                                               (docs/pointing-budgets.md)
+stability_window    time                    (below)                                            the stability window of the mean and
+                                                                                               relative indices: consecutive windows
+                                                                                               from the first output
+requirement         table of angles         none                                               each index's requirement (e.g. { ape =
+                                                                                               "0.1 deg", rpe = "10 arcsec" }): drawn by
+                                                                                               orbatt plot, checked by orbatt info
 """)["sweep"]
 #: outputs that may be asked for: their descriptors (:data:`orbatt.sweep_outputs.OUTPUTS`)
 OUTPUTS = tuple(SWEEP_OUTPUTS)
@@ -240,6 +252,9 @@ class SweepSpec:
     detumble_rate: float | None = None   # rad/s (or plain): detumble_time's threshold
     settling_angle: float | None = None  # rad: settling_time's threshold
     window: float | None = None          # s (or plain): pointing_error's window; None: the default
+    confidence: float = 0.9973           # the pointing indices' confidence level (docs/pointing-budgets.md)
+    stability_window: float | None = None  # s (or plain): the mean and relative indices' window
+    requirement: dict = field(default_factory=dict)  # pointing index -> requirement, rad
     min_apoapsis: float | None = None  # km: a draw whose apoapsis a (1 + e) is lower is invalid (the Earth's radius)
     source: str | None = None  # the scenario file (or name) the table was read from: messages about draws name it
 
@@ -527,6 +542,7 @@ def parse_sweep_table(ctx, table, *, dimensionless, potential_kind, orbit, frame
             raise ctx.error(f"[sweep] {k}", "only used with " + ", ".join(f"'{o}'" for o in users[:-1])
                             + f" or '{users[-1]}' in outputs")
     parse_study_keys(ctx, table, spec, dimensionless=dimensionless, control=control, wheels=wheels)
+    parse_requirement(ctx, table, spec)
     if "on_invalid" in table:
         if table["on_invalid"] not in ("error", "resample"):
             raise ctx.error("[sweep] on_invalid", f"{table['on_invalid']!r} is not 'error' or 'resample'")
