@@ -30,7 +30,12 @@ from .core import control as kc
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["KernelSpec", "assemble", "command_size", "controller_start", "control_of", "model_rows"]
+__all__ = ["KernelSpec", "assemble", "command_size", "controller_start", "control_of", "model_rows",
+           "FLIGHT_SOFTWARE_KINDS"]
+
+#: the kinds of rows with the flight-software slots (:data:`orbatt.core.control.FLIGHT_SOFTWARE`)
+#: and a discrete state in ``y`` after the wheels' momenta
+FLIGHT_SOFTWARE_KINDS = (km.PD_CONTROL, km.BDOT_CONTROL, km.MODES, km.MOMENTUM_DUMP, km.NAVIGATION)
 
 
 class KernelSpec(NamedTuple):
@@ -58,7 +63,7 @@ def controller_start(model):
     out = []
     for j in range(1, terms.shape[0]):
         kind, p0 = int(terms[j, km.KIND]), int(terms[j, km.P0])
-        if kind not in (km.PD_CONTROL, km.BDOT_CONTROL, km.MODES, km.MOMENTUM_DUMP):
+        if kind not in FLIGHT_SOFTWARE_KINDS:
             continue
         out.append(np.zeros(int(params[p0 + kc.CTL_NZ])))
     return np.concatenate(out) if out else np.empty(0)
@@ -173,4 +178,8 @@ def assemble(potential, bodies, control=None) -> KernelSpec:
                              f"{type(potential).__name__} has none; give a potential with an orbit (a gravity gradient, "
                              "orbatt.EnvironmentTorques(orbit, t_end, ...))")
         rows.extend(own)
+        navigation = getattr(control, "navigation", None)
+        if navigation is not None:  # the sensors and the filter (orbatt.sensors): their state after the laws'
+            z0 = 8 + len(wheels) + sum(int(p[kc.CTL_NZ]) for k, p, _ in own if k in FLIGHT_SOFTWARE_KINDS)
+            rows.append(navigation.model_row(z0, tables))
     return KernelSpec(*km.build(orbit=orbit_row, terms=rows))

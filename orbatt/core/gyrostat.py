@@ -27,7 +27,8 @@ from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
 from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, R0, R1, WHEELS, orbit_at,
                     orbit_radial, terms_at, time_of_s)
-from .model import MOMENTUM_DUMP
+from .model import MAGNETORQUERS, MOMENTUM_DUMP, NAVIGATION
+from . import estimator as est
 from .kepler import anomaly_of_time
 from .qalg import cross, qconj, qmul, qmul_pure, rotate_inv, vadd
 from .torques import gradient_of_torque
@@ -47,7 +48,7 @@ _MD_TIME, _MD_RATE, _MD_SETTLED, _MD_HOLD = (ctl.MODE_UNTIL_TIME, ctl.MODE_UNTIL
 @jit_inline
 def is_flight_software(kind):
     """Whether a row kind carries the flight-software slots (:data:`orbatt.core.control.FLIGHT_SOFTWARE`)."""
-    return kind == PD_CONTROL or kind == BDOT_CONTROL or kind == MODES or kind == MOMENTUM_DUMP
+    return kind == PD_CONTROL or kind == BDOT_CONTROL or kind == MODES or kind == MOMENTUM_DUMP or kind == NAVIGATION
 
 
 @jit_inline
@@ -145,6 +146,11 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 continue
         if kind == PD_CONTROL:
             wheels = params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS
+            mtq = params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_MAGNETORQUERS
+            b = (0.0, 0.0, 0.0)
+            mmax = 0.0
+            if mtq:  # the field B(t) (body axes) and the limit, from the companion row
+                b, mmax = magnetorquer_field(j, t, q, terms, params, table, work)
             if params[p0 + _CTL_PERIOD] > 0.0:
                 z0 = int(params[p0 + _CTL_Z0])
                 if wheels:
@@ -152,6 +158,11 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                         u[k] = y[z0 + k]
                     tb = ctl.wheel_reaction(omega, y, params, w0, u)
                     app = vadd(app, tb)
+                elif mtq:  # the dipole held since the tick, in the field of now
+                    m = (y[z0], y[z0 + 1], y[z0 + 2])
+                    tau = cross(m, b)
+                    ext = vadd(ext, tau)
+                    app = vadd(app, tau)
                 else:
                     tau = (y[z0], y[z0 + 1], y[z0 + 2])
                     ext = vadd(ext, tau)
@@ -169,6 +180,9 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 tb = ctl.wheel_torques(tau, omega, y, params, p0, w0, u)
                 app = vadd(app, tb)
             else:
+                if mtq:  # the part of the command normal to B: m x B
+                    m = ctl.torque_dipole(tau, b, mmax)
+                    tau = cross(m, b)
                 ext = vadd(ext, tau)
                 app = vadd(app, tau)
         elif kind == BDOT_CONTROL:
@@ -360,7 +374,19 @@ def tick(s, y, inertia, terms, params, table, work, start):
     w0 = wheel_row(terms)
     w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
     omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
-    for j in range(1, terms.shape[0]):  # the mode sequence first: its transition, then the laws
+    nav = -1
+    for j in range(1, terms.shape[0]):  # the sensors and the filter first (issue 33)
+        if terms[j, KIND] == NAVIGATION:
+            nav = terms[j, P0]
+            if start or _on_grid(s, t, params[nav + _CTL_PHASE], params[nav + _CTL_PERIOD], terms, params):
+                sun = (0.0, 0.0, 0.0)
+                if terms[j, R1] > terms[j, R0]:
+                    s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
+                    sun = (s4[0], s4[1], s4[2])
+                est.navigation_tick(t, y, q, omega, r, xhat, sun, params, nav, start)
+    # what the flight software knows: the estimate, when the laws act on it (else the truth)
+    q, omega = est.estimate_feedback(y, params, nav, q, omega)
+    for j in range(1, terms.shape[0]):  # the mode sequence next: its transition, then the laws
         if terms[j, KIND] == MODES:
             mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j, start)
     mode = current_mode(terms, params, y)
@@ -382,6 +408,12 @@ def tick(s, y, inertia, terms, params, table, work, start):
             tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y)
             if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
                 ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + wheel_count(params, w0)])
+            elif params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_MAGNETORQUERS:  # the dipole, held
+                b, mmax = magnetorquer_field(j, t, q, terms, params, table, work)
+                m = ctl.torque_dipole(tau, b, mmax)
+                y[z0] = m[0]
+                y[z0 + 1] = m[1]
+                y[z0 + 2] = m[2]
             else:
                 y[z0] = tau[0]
                 y[z0 + 1] = tau[1]
@@ -407,6 +439,18 @@ def tick(s, y, inertia, terms, params, table, work, start):
 
 
 @jit_inline
+def magnetorquer_field(j, t, q, terms, params, table, work):
+    """``(B, m_max)``: for PD row ``j`` on magnetorquers, the field at ``t`` in the body axes of
+    ``q`` (T) and the per-axis dipole limit, from its companion :data:`MAGNETORQUERS` row (the
+    first after ``j``: :meth:`orbatt.PDControl.model_rows` puts it there)."""
+    jm = j + 1
+    while terms[jm, KIND] != MAGNETORQUERS:
+        jm += 1
+    b4 = piece_eval(table[terms[jm, R0]:terms[jm, R1]], t, 3, terms[jm, FLAGS], work)
+    return rotate_inv(q, (b4[0], b4[1], b4[2])), params[terms[jm, P0] + ctl.MTQ_MAX_DIPOLE]
+
+
+@jit_inline
 def pd_row_target(j, t, terms, params, table, work):
     """``(position, rate)`` of PD row ``j``'s target table at ``t`` (inertial, km and km/s): the
     Sun's position (its rate left out: zeros), or a ground target's position and velocity;
@@ -414,7 +458,8 @@ def pd_row_target(j, t, terms, params, table, work):
     pos = (0.0, 0.0, 0.0)
     rate = (0.0, 0.0, 0.0)
     if terms[j, R1] > terms[j, R0]:
-        if params[terms[j, P0] + _PD_TARGET] == ctl.TARGET_GROUND:
+        target = params[terms[j, P0] + _PD_TARGET]
+        if target == ctl.TARGET_GROUND or target == ctl.TARGET_NADIR:
             pos, rate = piece_eval_rate(table[terms[j, R0]:terms[j, R1]], t, terms[j, FLAGS], work)
         else:
             s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)

@@ -34,6 +34,13 @@ constant body torque   9     ``[tau1, tau2, tau3]`` (body axes): thruster misali
 momentum dumping       10    :func:`orbatt.core.control.dump_params` (:data:`~orbatt.core.control.DUMP`):
                              magnetorquers unloading the wheels, ``m = k (h x B) / |B|^2``; table:
                              the field ``B`` (inertial); follows a PD law's row on wheels
+mode sequence          11    :func:`orbatt.core.control.modes_params`
+navigation             12    :func:`orbatt.core.estimator.nav_params`: the gyro, the star tracker and
+                             the MEKF (:mod:`orbatt.core.estimator`); optional table: the Sun's
+                             position (the star tracker's exclusion)
+magnetorquers          13    :func:`orbatt.core.control.magnetorquer_params`: the per-axis dipole
+                             limit; table: the field ``B`` (inertial); follows a PD law's row with
+                             ``actuator = magnetorquers``, which holds the dipole
 =====================  ====  =====================================================================
 
 Adding a kind: a :class:`TermKind` here, its kernel (a function of ``(q, c)`` and its
@@ -97,6 +104,11 @@ KINDS = (
     TermKind(10, "control", "momentum dumping with magnetorquers", orbit=True, table=True, extended=True),
     # the flight software's mode sequence: which law rows act (issue 32 item 4)
     TermKind(11, "modes", "a mode sequence of control laws", extended=True),
+    # the flight software's sensors and attitude filter (issue 32's ticks, issue 33); its table
+    # (the Sun's position, for the star tracker's exclusion) is optional
+    TermKind(12, "navigation", "attitude sensors and their filter", extended=True),
+    # magnetorquers making a PD law's torque: the companion row after it, with the field's table
+    TermKind(13, "control", "magnetorquers actuating a PD law", orbit=True, table=True, extended=True),
 )
 #: the kinds by code
 BY_CODE = {k.code: k for k in KINDS}

@@ -89,6 +89,8 @@ BDOT_CONTROL = 8
 CONSTANT_TORQUE = 9
 MOMENTUM_DUMP = 10
 MODES = 11
+NAVIGATION = 12
+MAGNETORQUERS = 13
 #: what each term kind is, in words (error messages: a method refusing the terms that act)
 KIND_DESCRIPTIONS = {k.code: k.description for k in KINDS}
 
@@ -484,7 +486,7 @@ def build(orbit=None, terms=()):
         raise ValueError("at most one row of reaction wheels")
     slot = FIRST_TABLE_SLOT
     for row in spec[1:]:  # a PD law's table is optional, a drag term's too with a closed-form density
-        optional = int(row[KIND]) == PD_CONTROL or (int(row[KIND]) == DRAG and params[row[P0] + 2] != DENSITY_TABLE)
+        optional = int(row[KIND]) in (PD_CONTROL, NAVIGATION) or (int(row[KIND]) == DRAG and params[row[P0] + 2] != DENSITY_TABLE)
         if (int(row[KIND]) in TABLE_TERMS and not optional) or (optional and row[R1] > row[R0]):
             if row[R1] - row[R0] < 2:
                 raise ValueError(f"term kind {int(row[KIND])} needs a table of at least 2 rows")

@@ -20,6 +20,7 @@ from ..core import model as km
 from ..laws import law_of
 from ..units import from_kernel
 from .content import Var
+from .navigation import navigation_variables
 
 __all__ = ["control_variables", "wheel_coordinates"]
 
@@ -136,6 +137,9 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
                                            "time each mode of the sequence began (NaN: not entered by the last output)",
                                            comment="mode_index k is flag value k of the variable mode: "
                                                    + ", ".join(f"{k} = {nm}" for k, nm in enumerate(names)))
+        navigation = getattr(control, "navigation", None)
+        if navigation is not None:  # the sensors and the filter (issue 33)
+            data.update(navigation_variables(model, qs if ens else qs[0], shape(zs), t, tdims, n, navigation))
     return data
 
 
