@@ -35,8 +35,11 @@ _WHERE = {
     "LAWS": ".laws", "control_law": ".laws",
     "rpm": ".units",
     "Sweep": ".sweep", "load_sweep": ".sweep", "run_sweep": ".sweep",
+    "pointing": ".pointing", "index_series": ".pointing", "window_means": ".pointing",
+    "temporal_quantile": ".pointing", "ensemble_quantile": ".pointing", "mixed_quantile": ".pointing",
+    "interpreted_quantile": ".pointing",
 }
-_SUBMODULES = {"canonical", "euler", "quaternion", "orbital", "methods"}
+_SUBMODULES = {"canonical", "euler", "quaternion", "orbital", "methods", "pointing"}
 
 __all__ = [
     "RigidBody", "State", "Potential", "TorqueFree", "HeavyTop", "propagate", "load_scenario", "Scenario",
@@ -48,6 +51,8 @@ __all__ = [
     "state_from_orbital", "to_orbital", "orbital_attitude", "inertial_attitude",
     "to_dataset", "open_dataset", "write_aem", "read_aem",
     "Sweep", "SweepError", "load_sweep", "run_sweep", "rpm",
+    "pointing", "index_series", "window_means", "temporal_quantile", "ensemble_quantile", "mixed_quantile",
+    "interpreted_quantile",
 ]
 
 

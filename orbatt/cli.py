@@ -387,6 +387,9 @@ def sweep_summary(ds, title="", run=None) -> str:
     if table:
         lines.append("  outputs over the cases (NaN: no value - never reached, or failed):")
         lines.extend(table)
+    from .dataset.pointing_budget import budget_lines
+
+    lines.extend(budget_lines(ds))  # the ECSS indices under the interpretations the file allows
     return "\n".join(lines)
 
 
@@ -420,14 +423,14 @@ def _cmd_plot(args):
             raise InputError(f"file: {args.file!r} has neither time histories nor per-case outputs; give the "
                              "output of 'orbatt run' or 'orbatt sweep'")
         from .dataset.figure_files import write_figures
-        from .dataset.sweep_figures import SWEEP_FIGURES, draw_sweep, sweep_outputs
+        from .dataset.sweep_figures import draw_sweep, sweep_figures_of, sweep_outputs
 
         if not sweep_outputs(ds):
             raise InputError(f"file: {args.file!r} is a sweep result without time histories or per-case outputs to "
                              "draw; add outputs (e.g. \"max_pointing_error\", \"trajectory\") to [sweep] outputs")
 
         # a sweep's per-case outputs: their distributions and their scatter against the parameters
-        for f in write_figures(ds, args.output, Path(args.file).stem, what="-o", figures=SWEEP_FIGURES,
+        for f in write_figures(ds, args.output, Path(args.file).stem, what="-o", figures=sweep_figures_of(ds),
                                draw_figure=draw_sweep):
             print(f)
         return 0

@@ -10,6 +10,12 @@ a distribution per wheel; the cases of each value of a grid parameter (``values 
 percentiles, a column of their own in the scatter; values are shown in a unit that keeps the
 tick labels short (deg/s, mm/s, or a power of ten in the axis label); a dimensionless output
 carries no unit ``1``; legends stand beside the axes, not on the data.
+
+A sweep with ECSS pointing indices (``ape``, ``rpe``, ``mpe``: ``docs/pointing-budgets.md``)
+also gets ``DIR/<name>-budget.png``: each index's CDF over the cases with its requirement line
+(``[sweep] requirement``) and the share of cases meeting it, and a bar chart of the budget
+(:func:`orbatt.dataset.pointing_budget.pointing_budget`: temporal median and maximum over the
+cases, the bounds of the mixed value, the requirement).
 """
 from __future__ import annotations
 
@@ -18,11 +24,11 @@ import json
 
 import numpy as np
 
-__all__ = ["SWEEP_FIGURES", "sweep_outputs", "sweep_wheel_outputs", "sweep_parameters", "grid_parameters",
+__all__ = ["SWEEP_FIGURES", "sweep_figures_of", "sweep_outputs", "sweep_wheel_outputs", "sweep_parameters", "grid_parameters",
            "display", "draw_sweep"]
 
-#: the figures of a sweep of per-case outputs
-SWEEP_FIGURES = ("distributions", "scatter")
+#: the figures of a sweep of per-case outputs ("budget": only with pointing indices, :func:`sweep_figures_of`)
+SWEEP_FIGURES = ("distributions", "scatter", "budget")
 #: flags and bookkeeping, not outputs to draw or summarize
 FLAGS = ("integration_failed", "tumbling", "wheel_saturated")
 #: display units: a factor and a label
@@ -35,6 +41,14 @@ _WHEEL_DISPLAY = {"rad s^-1": (60.0 / (2.0 * np.pi), "rpm")}
 GRID_MAX_VALUES = 4
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan")
 _STYLES = ("-", "--", ":", "-.")
+
+
+def sweep_figures_of(ds):
+    """The figures of :data:`SWEEP_FIGURES` that ``ds`` has data for (``budget``: with pointing
+    indices)."""
+    from .pointing_budget import index_variables
+
+    return tuple(f for f in SWEEP_FIGURES if f != "budget" or index_variables(ds))
 
 
 def sweep_outputs(ds):
@@ -268,6 +282,59 @@ def _scatter(ds, rows):
     return fig
 
 
+def _budget(ds):
+    """Each pointing index's CDF over the cases with its requirement, and the budget's bars."""
+    import matplotlib.pyplot as plt
+
+    from .pointing_budget import angle_display, pointing_budget
+
+    rows = pointing_budget(ds)
+    n = max(len(rows), 1)
+    factor, unit = angle_display(np.concatenate([[r["max"], r["requirement"] or np.nan] for r in rows]
+                                                if rows else [[]]))
+    fig = plt.figure(figsize=(max(3.2 * n, 6.5) + 2.0, 6.6), layout="constrained")
+    top, bottom = fig.subfigures(2, 1, height_ratios=(1.0, 1.1))
+    axes = np.atleast_1d(top.subplots(1, n, squeeze=False)[0])
+    for ax, r in zip(axes, rows):
+        x = np.sort(r["values"]) * factor
+        if x.size:
+            ax.step(x, np.arange(1, x.size + 1) / x.size, where="post", color="tab:blue")
+        if r["requirement"] is not None:
+            req = r["requirement"] * factor
+            ax.axvline(req, color="tab:red", lw=1.4,
+                       label=f"requirement {req:.4g} {unit}: {r['meeting']} of {x.size} cases")
+        ax.set_title(f"{r['name']} at {r['confidence']:g}: {x.size} cases" +
+                     (f"; {r['missing']} NaN" if r["missing"] else ""), fontsize=9)
+        ax.set_xlabel(f"{r['name']} [{unit}]", fontsize=8)
+        ax.set_ylabel("fraction of cases", fontsize=8)
+        ax.set_ylim(0.0, 1.0)
+        _ticks(ax)
+        if r["requirement"] is not None:
+            ax.legend(loc="lower right", fontsize=7)
+    ax = bottom.subplots()
+    names = [r["name"] for r in rows]
+    pos = np.arange(len(rows))
+    w = 0.35
+    ax.bar(pos - w / 2, [r["median"] * factor for r in rows], w, color="tab:blue", label="temporal: median over cases")
+    ax.bar(pos + w / 2, [r["max"] * factor for r in rows], w, color="tab:orange", label="temporal: worst case")
+    for k, r in enumerate(rows):
+        lo, hi = r["mixed"]
+        ax.plot([k + w + 0.08] * 2, [lo * factor, hi * factor], color="0.2", lw=3, solid_capstyle="butt",
+                label="mixed: bounds (series not stored)" if k == 0 else None)
+        if r["requirement"] is not None:
+            ax.hlines(r["requirement"] * factor, k - 0.45, k + 0.45, color="tab:red", lw=2,
+                      label="requirement" if all(q["requirement"] is None for q in rows[:k]) else None)
+    ax.set_xticks(pos, names)
+    ax.set_xlim(-0.6, len(rows) - 0.2)
+    ax.set_ylabel(f"index [{unit}]", fontsize=8)
+    ax.set_title("budget (ensemble: worst time over the cases, not computed: each case's series is not stored)",
+                 fontsize=9)
+    _ticks(ax, "y")
+    _legend(ax)
+    fig.suptitle(f"{ds.attrs.get('title', 'sweep')}: pointing budget (ECSS-E-ST-60-10C)", fontsize=10)
+    return fig
+
+
 def draw_sweep(ds, figure):
     """The matplotlib figure ``figure`` (one of :data:`SWEEP_FIGURES`) of a sweep Dataset."""
     rows = sweep_outputs(ds) + sweep_wheel_outputs(ds)
@@ -275,4 +342,6 @@ def draw_sweep(ds, figure):
         return _distributions(ds, rows)
     if figure == "scatter":
         return _scatter(ds, rows)
+    if figure == "budget":
+        return _budget(ds)
     raise ValueError(f"figure: {figure!r} is not one of {SWEEP_FIGURES}")
