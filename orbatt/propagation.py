@@ -124,6 +124,7 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
     check_extended(cls, kernel)
     z0 = controller_start(kernel)
     nz = z0.size
+    y0, z0, resume = _continued(state0, y0, z0)
     if nz:  # the controllers' states (held commands, integrals, modes), issued at the driver's first tick
         if not getattr(cls, "ticks", False):
             raise InputError(f"method: {cls.name!r} cannot run a control law with a flight-software period or an "
@@ -131,12 +132,17 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
                              "method = 'dop853' or 'vern98'")
         y0 = np.ascontiguousarray(np.hstack([y0, np.broadcast_to(z0, (y0.shape[0], nz))]))
     t0, t_end, tv = time_span(t, t_span, bodies[0], potential)
+    if resume is not None and t0 != state0.t:
+        raise InputError(f"t: the run starts at {t0!r} and state0 is the state at {state0.t!r}; continue a run from "
+                         "the time of its state (t[0] = state0.t)")
     rtol, atol, stepv, max_steps = method_settings(cls, rtol, atol, step, max_steps, bodies[0])
     progress = progress_callback(progress)
     t_out, step_ends = output_times(cls, t0, t_end, tv, stepv, max_steps, ensemble)
     problem = Problem(t0=t0, t_out=t_out, step_ends=step_ends, y0=y0, inertia=inertia, kernel=kernel,
                       ensemble=ensemble)
     m = cls(rtol=rtol, atol=atol, step=stepv, max_steps=max_steps, **options)
+    if resume is not None and hasattr(m, "resume"):
+        m.resume = resume
     m.start(problem)
 
     def result(complete, reason, wall):
@@ -154,9 +160,42 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
                           wheel_momenta=np.ascontiguousarray(Y[..., 8:8 + nw]) if nw else None,
                           command=np.ascontiguousarray(Y[..., 8 + nw:]) if nz else None,
                           inertia=inertia if body_ensemble else inertia[0].copy(), method=m.name,
-                          settings=m.settings(), stats=stats, complete=complete)
+                          settings=m.settings(), stats=stats, complete=complete,
+                          continuation=_continuation(m, complete, resume))
 
     return _run_chunks(m, problem, progress, result)
+
+
+def _continued(state0, y0, z0):
+    """``(y0, z0, resume)``: the initial states and the flight software's initial state of a
+    run, and what its method needs to continue the run ``state0`` comes from (None for a new
+    run): a :class:`~orbatt.state.State` with a time (:meth:`~orbatt.state.State.continuing`)
+    brings the wheels' momenta and the flight software's state ``z`` (after the tick at its
+    time, if one: no tick at the start), the tick grid's origin and the step controller's
+    memory."""
+    if getattr(state0, "t", None) is None:
+        return y0, z0, None
+    h, z = state0.wheel_momenta, state0.command
+    if h is not None:
+        if h.shape[-1] != y0.shape[1] - 8:
+            raise InputError(f"state0: holds {h.shape[-1]} wheels' momenta and the body has {y0.shape[1] - 8} wheels; "
+                             "continue a run with the body it was run with")
+        y0[:, 8:] = h
+    if z is not None and z.shape[-1] != z0.size:
+        raise InputError(f"state0: holds {z.shape[-1]} components of the flight software's state and this model "
+                         f"has {z0.size}; continue a run with the control law it was run with")
+    carried = z is not None and z.size > 0
+    return y0, (z if carried else z0), {"commands": carried, "phase": state0.phase, "stepper": state0.stepper}
+
+
+def _continuation(m, complete, resume):
+    """What :meth:`orbatt.trajectory.Trajectory.state` needs besides the outputs: the tick
+    grid (``period``, ``phase``) and, after a complete run, the step controller's memory at its
+    end (methods that keep one: :meth:`orbatt.methods.dop853.DOP853.stepper`)."""
+    grid = m.tick_grid() if hasattr(m, "tick_grid") else None
+    stepper = m.stepper() if complete and hasattr(m, "stepper") else None
+    period, phase = grid if grid is not None else (None, None)
+    return {"period": period, "phase": phase, "stepper": stepper}
 
 
 def _run_chunks(m: Method, problem: Problem, progress, result) -> Trajectory:

@@ -7,6 +7,9 @@ A state may hold a batch: ``q`` and ``Q`` of shape ``(..., 4)``.
 """
 from __future__ import annotations
 
+import json
+import math
+
 import numpy as np
 
 from . import canonical as cn
@@ -39,6 +42,50 @@ def unit_quaternion(q, name="q"):
         raise InputError(f"{name}: |q| = {first:.10g} is not 1 (tolerance "
                          f"{UNIT_TOLERANCE:g}); give a unit quaternion (scalar first)")
     return q / n[..., None]
+
+
+def _finite(value, name):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: {value!r} is not a number") from None
+    if not math.isfinite(v):
+        raise InputError(f"{name}: {value!r} is not finite")
+    return v
+
+
+#: the step loop's memory a continued run takes over (:meth:`orbatt.methods.dop853.DOP853.stepper`)
+STEPPER_KEYS = ("h", "facold", "switch", "flags", "f0", "work", "independent_variable", "method")
+
+
+def _floats(v):
+    """An array of floats from a record (None: NaN)."""
+    return np.array(np.where(np.equal(np.array(v, dtype=object), None), np.nan, np.array(v, dtype=object)),
+                    dtype=np.float64)
+
+
+def _stepper(s):
+    """The step loop's memory (:data:`STEPPER_KEYS`), checked: plain arrays."""
+    if not isinstance(s, dict) or not set(STEPPER_KEYS) <= set(s):
+        raise InputError(f"stepper: expected a dict with {', '.join(STEPPER_KEYS)}, got {str(s)[:80]!r}")
+    try:
+        out = {k: _floats(s[k]) for k in ("h", "facold", "switch", "f0", "work")}
+        out["flags"] = np.array(s["flags"], dtype=np.int64)
+    except (TypeError, ValueError):
+        raise InputError(f"stepper: not arrays of numbers ({str(s)[:80]!r}); the record was edited or damaged") from None
+    h, fac = out["h"], out["facold"]
+    if not (np.isfinite(h).all() and (h > 0).all() and np.isfinite(fac).all() and (fac > 0).all()):
+        raise InputError(f"stepper: h = {h!r} and facold = {fac!r} must be positive and finite")
+    out["independent_variable"], out["method"] = str(s["independent_variable"]), str(s["method"])
+    return out
+
+
+def _plain(v):
+    """A JSON form of an array (NaN: None)."""
+    a = np.asarray(v)
+    if a.dtype.kind == "f":
+        return np.where(np.isnan(a), None, a.astype(object)).tolist()
+    return a.tolist()
 
 
 class State:
@@ -82,6 +129,28 @@ class State:
         self.Q = Qv
         #: ``q.Q`` of the given data (0 for states built from rates or momenta)
         self.radial_residual = qQ
+        self._no_continuation()
+
+    def _no_continuation(self):
+        #: the time of the state (the body's time unit), for a state a run continues from; None
+        self.t = None
+        #: the reaction wheels' axial momenta ``(..., n)`` (kg km^2/s) a run continues from; None:
+        #: from the body rate and the wheels' initial speeds (:func:`orbatt.methods.problem.initial_states`)
+        self.wheel_momenta = None
+        #: the flight software's discrete state ``z (..., nz)`` (held commands, a PD law's
+        #: integral, a mode sequence's state: :attr:`orbatt.trajectory.Trajectory.command`), in
+        #: kernel units, after the tick at :attr:`t` if ``t`` is a tick; None: a new run (its
+        #: first tick issues the commands at its start)
+        self.command = None
+        #: the origin of the flight software's tick grid ``t_k = phase + k period`` (the body's
+        #: time unit); None: the law's own (0, the time axis' origin)
+        self.phase = None
+        #: the flight software's period of the run the state comes from (information; None)
+        self.period = None
+        #: the step loop's memory at :attr:`t` (:data:`STEPPER_KEYS`): a run continued from it
+        #: takes the steps the run it comes from would have taken, as after a pause (None: a
+        #: fresh start, Hairer's initial step)
+        self.stepper = None
 
     # ---- constructors -------------------------------------------------------------------
     @classmethod
@@ -122,6 +191,115 @@ class State:
         q, Q = eu.to_canonical(ang, mom)
         return cls(body, q, Q)
 
+    @classmethod
+    def continuing(cls, body: RigidBody, t, y, *, phase=None, period=None, stepper=None):
+        """The state a run continues from: the kernels' state vector ``y = (q, Q, h, z)`` at
+        time ``t``, kept bit for bit (``q`` is checked, not normalized).
+
+        A run of :func:`orbatt.propagate` from it starts at ``t`` with the wheels' momenta
+        ``h`` and the flight software's state ``z`` it holds (no tick at its start: ``z`` is the
+        state after the tick at ``t`` if ``t`` is one), on the tick grid ``phase + k period``,
+        and, with a ``stepper``, with the step controller's memory: it then gives the outputs
+        of the run it continues bit for bit (:meth:`orbatt.trajectory.Trajectory.state`).
+
+        Parameters
+        ----------
+        body : RigidBody
+            Its wheels say how many components of ``y`` after ``Q`` are their momenta.
+        t : float
+            Time (the body's time unit: s, or dimensionless).
+        y : array-like (..., 8 + n + nz)
+            ``q`` (4), ``Q`` (4, the body's momentum unit), the wheels' momenta (``n``,
+            kg km^2/s), the flight software's state (``nz``, kernel units).
+        phase, period : float, optional
+            The tick grid of the run it continues (the body's time unit).
+        stepper : dict, optional
+            The step loop's memory at ``t`` (:data:`STEPPER_KEYS`: the next step ``h``, the
+            controller's ``facold``, a located ``switch``, ``flags``, the derivative ``f0``, the
+            scratch array ``work``, per member; the ``independent_variable`` and ``method``), as
+            :meth:`orbatt.methods.dop853.DOP853.stepper` gives it.
+        """
+        if hasattr(y, "unit"):
+            raise InputError("y: give plain floats in the kernels' units (as Trajectory.q, Q, wheel_momenta, command "
+                             "hold them), not a Quantity")
+        try:
+            y = np.array(y, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"y: {str(y)[:80]!r} is not an array of numbers") from None
+        n = len(body.wheels)
+        if y.ndim not in (1, 2) or y.shape[-1] < 8 + n:
+            raise InputError(f"y: expected (q, Q, the {n} wheels' momenta, the flight software's state) along the last "
+                             f"axis, at least {8 + n} components, got shape {y.shape}")
+        if not np.isfinite(y).all():
+            raise InputError(f"y: holds non-finite values ({y!r}); continue only from a finite state")
+        try:
+            tv = float(t)
+        except (TypeError, ValueError):
+            raise InputError(f"t: {t!r} is not a time (a float in the body's time unit)") from None
+        if not math.isfinite(tv):
+            raise InputError(f"t: {t!r} is not finite")
+        st = cls(body, y[..., :4], y[..., 4:8])  # the checks of q and Q
+        st.q = np.ascontiguousarray(y[..., :4])  # bit for bit (State() normalizes q)
+        st.Q = np.ascontiguousarray(y[..., 4:8])
+        st.radial_residual = qt.dot(st.q, st.Q)
+        st.t = tv
+        st.wheel_momenta = np.ascontiguousarray(y[..., 8:8 + n]) if n else None
+        st.command = np.ascontiguousarray(y[..., 8 + n:])
+        st.phase = None if phase is None else _finite(phase, "phase")
+        st.period = None if period is None else _finite(period, "period")
+        st.stepper = None if stepper is None else _stepper(stepper)
+        return st
+
+    @classmethod
+    def of_trajectory(cls, trajectory, i=-1):
+        """The state of a :class:`~orbatt.trajectory.Trajectory` at its output ``i`` (default
+        the last), to continue the run from (:meth:`continuing`). The step controller's memory
+        comes with the last output of a complete run of the compiled Runge-Kutta methods only
+        (the loop keeps it there): continued from it, a run is bitwise the run it continues;
+        from another output it starts with a fresh step (equal to the tolerances)."""
+        tr = trajectory
+        nt = tr.t.shape[0]
+        if not -nt <= i < nt:
+            raise InputError(f"i: output {i} does not exist (the trajectory has {nt}); give -{nt} .. {nt - 1}")
+        k = i % nt
+        parts = [tr.q[..., k, :], tr.Q[..., k, :]]
+        parts += [x[..., k, :] for x in (tr.wheel_momenta, tr.command) if x is not None]
+        info = getattr(tr, "continuation", None) or {}
+        stepper = info.get("stepper") if k == nt - 1 and tr.complete else None
+        return cls.continuing(tr.body, tr.t[k], np.concatenate(parts, axis=-1), phase=info.get("phase"),
+                              period=info.get("period"), stepper=stepper)
+
+    def record(self):
+        """The state as plain JSON values (what a NetCDF file keeps to continue its run from:
+        the global attribute ``continuation``); :meth:`from_record` reads it back bit for bit
+        (Python's float ``repr`` round-trips)."""
+        if self.t is None:
+            raise InputError("state: it has no time; build it with State.continuing or Trajectory.state()")
+        parts = [self.q, self.Q] + [x for x in (self.wheel_momenta, self.command) if x is not None]
+        y = np.concatenate([np.broadcast_to(x, np.broadcast_shapes(self.q.shape[:-1], x.shape[:-1]) + x.shape[-1:])
+                            for x in parts], axis=-1)
+        rec = {"t": self.t, "y": y.tolist(), "wheels": len(self.body.wheels), "units": "kernel",
+               "phase": self.phase, "period": self.period}
+        if self.stepper is not None:
+            rec["stepper"] = {k: (v if isinstance(v, str) else _plain(v)) for k, v in self.stepper.items()}
+        return rec
+
+    @classmethod
+    def from_record(cls, body: RigidBody, record):
+        """The state of a :meth:`record` (a dict, or its JSON text) for ``body``."""
+        if isinstance(record, str):
+            try:
+                record = json.loads(record)
+            except ValueError as exc:
+                raise InputError(f"continuation: not JSON ({exc}); the file was edited or damaged") from None
+        if not isinstance(record, dict) or not {"t", "y", "wheels"} <= set(record):
+            raise InputError(f"continuation: expected a record with t, y and wheels, got {str(record)[:80]!r}")
+        if int(record["wheels"]) != len(body.wheels):
+            raise InputError(f"continuation: the state holds {record['wheels']} wheels' momenta and the body has "
+                             f"{len(body.wheels)} wheels; continue a run with the body it was run with")
+        return cls.continuing(body, record["t"], record["y"], phase=record.get("phase"), period=record.get("period"),
+                              stepper=record.get("stepper"))
+
     # ---- derived quantities -------------------------------------------------------------
     @property
     def g(self):
@@ -132,6 +310,11 @@ class State:
     def omega(self):
         """Body angular velocity (body components, rad per time unit); for a body with
         reaction wheels ``I^-1 (g - sum Iw speed a)`` with the wheels' initial speeds."""
+        if self.body.wheels and self.wheel_momenta is not None:  # J omega = g - sum h_k a_k, J = I - sum Iw a a^T
+            axes = np.array([w.axis for w in self.body.wheels])
+            J = np.diag(self.body.inertia_value) - sum(w.inertia * np.outer(w.axis, w.axis) for w in self.body.wheels)
+            rhs = self.g - self.wheel_momenta @ axes
+            return np.linalg.solve(J, rhs[..., None])[..., 0]
         if self.body.wheels:
             return (self.g - self.body.rotor_momentum) / self.body.inertia_value
         return cn.body_rate(self.q, self.Q, self.body.inertia_value)

@@ -7,6 +7,7 @@ import numpy as np
 
 from .body import RigidBody
 from .potentials import Potential
+from .state import State
 
 
 @dataclass
@@ -45,6 +46,10 @@ class Trajectory:
     control : PDControl or BDotControl, or None
         The control law in the loop (given to :func:`orbatt.propagate` beside the potential,
         or carried by it: :func:`orbatt.model_assembly.control_of`).
+    continuation : dict or None
+        What :meth:`state` needs besides the outputs to continue the run: the tick grid
+        (``period``, ``phase``; None without one) and the step controller's memory at the end of
+        a complete run (``stepper``; None where the method keeps none).
     """
 
     body: RigidBody
@@ -60,6 +65,7 @@ class Trajectory:
     wheel_momenta: np.ndarray = None
     control: object = None
     command: np.ndarray = None
+    continuation: dict = None
 
     def __post_init__(self):
         if self.control is None:  # a law the potential carries (EnvironmentTorques(control=))
@@ -73,6 +79,14 @@ class Trajectory:
         if not parts:
             return None
         return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
+
+    def state(self, i=-1):
+        """The :class:`~orbatt.state.State` at output ``i`` (default the last) to continue the run
+        from with :func:`orbatt.propagate` (``t[0]`` = its time): ``q``, ``Q``, the wheels'
+        momenta and the flight software's state bit for bit, the tick grid, and at the last
+        output of a complete run the step controller's memory, so that the continued run gives
+        this run's outputs bit for bit (:meth:`orbatt.state.State.of_trajectory`)."""
+        return State.of_trajectory(self, i)
 
     @property
     def orbit(self):

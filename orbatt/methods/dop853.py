@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 
+from ..core import control as kc
 from ..core import dop853 as kd
 from ..core import gyrostat as kg
 from ..core import kepler as kk
@@ -19,7 +20,8 @@ from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
 from .problem import KernelSpec
 
-__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes", "LockstepSwitchWarning"]
+__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes", "LockstepSwitchWarning", "tick_grid", "with_phase",
+           "resume_stepper"]
 
 #: counters summed into the statistics
 _COUNTS = {"steps": kd.CNT_STEPS, "rejected_steps": kd.CNT_REJECTED, "rhs_evaluations": kd.CNT_NFEV,
@@ -47,6 +49,11 @@ class DOP853(Method):
     extended = True
     #: runs the flight software's ticks (a control law with a period) as knots of its loop
     ticks = True
+    #: a run continued from a :class:`~orbatt.state.State` (:func:`orbatt.propagate` sets it before
+    #: :meth:`start`): ``{"commands": bool, "phase": float or None, "stepper": dict or None}``:
+    #: the flight software's state is in ``y0`` already (no tick at the start), the tick grid's
+    #: origin, the step controller's memory (:func:`resume_stepper`)
+    resume = None
     options = {"max_step": "largest step allowed (time unit of the body); default no limit",
                "independent_variable": "'auto' (default: the eccentric anomaly on a Keplerian orbit, else the "
                                        "time), 'eccentric-anomaly' or 'time'",
@@ -138,12 +145,16 @@ class DOP853(Method):
         # kernel output times: those after t0 (outputs at t0 are the initial state)
         self.n0 = int(np.searchsorted(p.t_out, p.t0, side="right"))
         self.t_k = np.ascontiguousarray(p.t_out[self.n0:])
-        self.kernel = switches_off(self._independent_variable(p), self.switches)
+        resume = self.resume or {}
+        self.kernel = switches_off(with_phase(self._independent_variable(p), resume.get("phase")), self.switches)
         self._start_states(self.ST)
+        resume_stepper(self, resume.get("stepper"))
         # the flight software's first tick (issue 32): the commands held from t0, in the initial
-        # state that the outputs at t0 show (the loop's first call finds them set)
+        # state that the outputs at t0 show (the loop's first call finds them set); a continued
+        # run holds the state after the tick at t0 already (orbatt.State.command)
         self.y_start = p.y0
-        if (p.kernel.terms[0, km.FLAGS] & km.EXTENDED) and kg.has_ticks(self.kernel.terms, self.kernel.params):
+        if (p.kernel.terms[0, km.FLAGS] & km.EXTENDED) and not resume.get("commands") and \
+                kg.has_ticks(self.kernel.terms, self.kernel.params):
             for e in range(E):
                 kg.tick(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], True)
             self.y_start = self.Y.copy()
@@ -153,6 +164,20 @@ class DOP853(Method):
             self.n0 = 1
         else:
             self.out = np.empty((E, self.t_k.shape[0], width))
+
+    def stepper(self):
+        """The step controller's memory where the run stands (``h``, ``facold`` per member,
+        ``independent_variable``, ``method``): what a run continued from here needs to take the
+        same steps (:class:`orbatt.state.State`, ``stepper``)."""
+        keep = ~np.int64(kd.FLAG_F0_VALID | kd.FLAG_REJECTED)
+        return {"h": self.ST[:, kd.ST_H].copy(), "facold": self.ST[:, kd.ST_FACOLD].copy(),
+                "switch": self.ST[:, kd.ST_SWITCH_T:kd.ST_SWITCH_K + 1].copy(),
+                "flags": self.CNT[:, kd.CNT_FLAGS] & ~keep, "f0": self.F0.copy(), "work": self.WORK.copy(),
+                "independent_variable": self.settings()["independent_variable"], "method": self.name}
+
+    def tick_grid(self):
+        """``(period, phase)`` of the flight software's ticks of the model run, or None."""
+        return tick_grid(self.kernel)
 
     def advance(self, budget):
         p = self.p
@@ -215,6 +240,60 @@ class DOP853(Method):
 
     def time_reached(self):
         return self._time(self.ST[:, kd.ST_T].min())
+
+
+def _ticking_rows(kernel):
+    """The parameter offsets of the model's rows that run at a flight-software period."""
+    terms, params = kernel.terms, kernel.params
+    is_fsw = getattr(kg.is_flight_software, "py_func", kg.is_flight_software)
+    return [int(terms[j, km.P0]) for j in range(1, terms.shape[0])
+            if is_fsw(int(terms[j, km.KIND])) and params[int(terms[j, km.P0]) + kc.CTL_PERIOD] > 0.0]
+
+
+def tick_grid(kernel):
+    """``(period, phase)`` of the flight software's ticks ``phase + k period`` (the model's
+    time unit; the flight software has one rate), or None without a law that has a period."""
+    rows = _ticking_rows(kernel)
+    if not rows:
+        return None
+    return float(kernel.params[rows[0] + kc.CTL_PERIOD]), float(kernel.params[rows[0] + kc.CTL_PHASE])
+
+
+def with_phase(kernel, phase):
+    """``kernel`` with its tick grid anchored at ``phase`` (a continued run keeps the grid of
+    the run it continues: :attr:`orbatt.state.State.phase`); a copy of its ``params`` where that
+    changes them, ``kernel`` itself where not (``phase`` None: the law's own)."""
+    if phase is None:
+        return kernel
+    rows = [p0 for p0 in _ticking_rows(kernel) if kernel.params[p0 + kc.CTL_PHASE] != phase]
+    if not rows:
+        return kernel
+    params = kernel.params.copy()
+    for p0 in rows:
+        params[p0 + kc.CTL_PHASE] = float(phase)
+    return KernelSpec(kernel.terms, params, kernel.table)
+
+
+def resume_stepper(method, stepper):
+    """Put the step loop's memory ``stepper`` (:meth:`DOP853.stepper` of the run continued) into
+    ``method``'s integrator states, as a resumed call finds them after a pause: the next step,
+    the PI controller's last error and last rejection, the derivative at the start (FSAL), a
+    located switch, the scratch array (the base of the eccentric anomaly's ``sin``/``cos``,
+    Kepler's warm start, the switching functions' references: the numbers depend on them).
+    Only from the same method in the same independent variable and model size (else the run
+    starts afresh: Hairer's initial step)."""
+    st, E = method.ST, method.ST.shape[0]
+    if stepper is None or stepper.get("method") != method.name or \
+            stepper.get("independent_variable") != method.settings()["independent_variable"] or \
+            np.shape(stepper["f0"])[-1] != method.F0.shape[1] or np.shape(stepper["work"])[-1] != method.WORK.shape[1]:
+        return False
+    st[:, kd.ST_H] = np.broadcast_to(np.asarray(stepper["h"], dtype=np.float64), (E,))
+    st[:, kd.ST_FACOLD] = np.broadcast_to(np.asarray(stepper["facold"], dtype=np.float64), (E,))
+    st[:, kd.ST_SWITCH_T:kd.ST_SWITCH_K + 1] = np.broadcast_to(np.asarray(stepper["switch"], dtype=np.float64), (E, 2))
+    method.CNT[:, kd.CNT_FLAGS] |= np.broadcast_to(np.asarray(stepper["flags"], dtype=np.int64), (E,))
+    method.F0[:] = np.broadcast_to(np.asarray(stepper["f0"], dtype=np.float64), method.F0.shape)
+    method.WORK[:] = np.broadcast_to(np.asarray(stepper["work"], dtype=np.float64), method.WORK.shape)
+    return True
 
 
 @register
@@ -298,6 +377,10 @@ class DOP853Lanes(DOP853):
                         *self.kernel, self.GWORK, self.lanes, self.rtol, self.atol, self.max_step,
                         self.max_steps, budget)
         return self.check_status(self.gstatus)
+
+    def stepper(self):
+        """None: lockstep groups share a step (a continued run starts afresh)."""
+        return None
 
     def failure_point(self, g):
         # the kernel stores the first failing lane + 1 above the flag bits of CNT_FLAGS
