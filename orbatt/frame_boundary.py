@@ -1,0 +1,242 @@
+"""The boundary between the user's body frame ``B`` and the principal frame ``P`` the kernels
+integrate in (a body given by a full inertia tensor, :mod:`orbatt.body_frame`).
+
+The change is made once per run, here, and nowhere else:
+
+* **in** (:func:`principal_run`, called by :func:`orbatt.propagate`): the bodies become their
+  :attr:`~orbatt.RigidBody.principal` bodies (principal moments, wheel axes ``R^T a``), the
+  initial state ``q_P = q_B r``, ``Q_P = Q_B r``, and every body-fixed input of the potential
+  and the control law turns by ``R^T`` where it enters the kernel model
+  (:func:`principal_potential`, :func:`principal_control`): the heavy top's centre of mass, the
+  facets' normals and centres of pressure, the residual dipole, the constant body torque, a PD
+  law's body axis ``target_axis`` (Sun, ground) and its target attitude ``target_q`` (inertial,
+  or relative to the orbital frame: ``target_q r``; the default orbital target, the identity,
+  becomes ``r``). Initial rates, ``euler_313`` and frames of ``[initial]`` are taken in ``B`` by
+  :class:`orbatt.State` (``State.from_omega`` of a tensor body: ``g = I_B omega + h``).
+* **out**: the :class:`~orbatt.trajectory.Trajectory` holds ``q_B = q_P r~`` and ``Q_B = Q_P
+  r~`` and the user's body, potential and law (:func:`body_trajectory`); the Dataset
+  (:func:`principal_trajectory` to compute with the kernels, then :func:`body_variables`)
+  turns every body-axes variable (``frame = "B"``: ``omega``, ``g``, the torques, ``wheel_axis``,
+  ``dipole_control`` ...) back with ``R``, and the attitude family (``q``, ``Q``,
+  ``q_orbital``, the Euler angles) with ``r~``; it records ``inertia_tensor`` (``B``) and
+  ``principal_axes`` (``R``) beside the principal moments ``inertia``.
+
+What cannot be moved to ``P`` without changing the kernels is refused: limits applied per body
+axis (a PD law's ``max_torque``, B-dot's and dumping's per-axis dipole limits) clip along the
+axes of ``P`` in the kernels, which differ from ``B``'s. A diagonal tensor has no frame
+(``RigidBody.frame`` None): nothing here touches its run, which stays bit for bit the
+principal-axes run.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+
+from . import quaternion as qt
+from .control import BDotControl, PDControl
+from .errors import InputError
+from .modes import ModeSequence
+from .orbital import lvlh_angles
+from .potentials import GravityGradient, HeavyTop, TorqueFree
+from .state import State
+from .torques import TERM_KEYWORDS, EnvironmentTorques, Facet
+
+__all__ = ["frame_of", "principal_run", "principal_potential", "principal_control", "body_trajectory",
+           "principal_trajectory", "body_variables"]
+
+_FIX = ("or give [body] inertia as principal moments in principal axes (the body frame's limits then lie "
+        "along them)")
+
+
+def frame_of(bodies):
+    """The :class:`~orbatt.body_frame.BodyFrame` shared by ``bodies`` (a RigidBody or a list),
+    or None when their axes are principal; members with different frames are refused (one
+    kernel model serves them all)."""
+    bodies = bodies if isinstance(bodies, (list, tuple)) else [bodies]
+    frames = [getattr(b, "frame", None) for b in bodies]
+    f = frames[0]
+    if any((g is None) != (f is None) or (g is not None and g.key() != f.key()) for g in frames[1:]):
+        raise InputError("body: the members of an ensemble have inertia tensors with different principal axes; "
+                         "orbatt integrates them in one principal frame: give members whose tensors share "
+                         "their principal axes")
+    return f
+
+
+def _refuse(key, what):
+    raise InputError(f"{key}: {what} clips each body axis, but with a full [body] inertia tensor (not diagonal) "
+                     "orbatt integrates in the tensor's principal axes and its kernels clip along those; leave "
+                     f"{key.split()[-1]} out, {_FIX}")
+
+
+def principal_control(law, frame):
+    """``law`` (PDControl, BDotControl, ModeSequence or None) with its body-fixed settings in
+    ``P`` (module docstring); ``law`` itself when ``frame`` is None."""
+    if frame is None or law is None:
+        return law
+    if isinstance(law, ModeSequence):
+        out = copy.copy(law)
+        out.modes = []
+        for m in law.modes:
+            mm = copy.copy(m)
+            mm.law = principal_control(m.law, frame)
+            out.modes.append(mm)
+        return out
+    if isinstance(law, BDotControl):
+        _refuse("[control] max_dipole", "B-dot's per-axis dipole limit")
+    if not isinstance(law, PDControl):
+        raise InputError(f"control: {type(law).__name__} is not known to orbatt.frame_boundary, which turns a law's "
+                         "body-fixed settings into the principal frame of a full inertia tensor; give the inertia as "
+                         "principal moments")
+    if law.max_torque is not None:
+        _refuse("[control] max_torque", "the PD law's torque limit")
+    if law.dump_gain is not None:
+        _refuse("[control] dump_max_dipole", "momentum dumping's per-axis dipole limit")
+    out = copy.copy(law)
+    out.__dict__.pop("_rows", None)
+    if law.target_axis is not None:
+        out.target_axis = frame.to_principal(law.target_axis)
+    elif law.target in ("orbital", "inertial"):
+        tq = law.target_q if law.target_q is not None else np.array([1.0, 0.0, 0.0, 0.0])
+        out.target_q = frame.attitude_to_principal(tq)
+    return out
+
+
+def principal_potential(potential, frame):
+    """``potential`` with its body-fixed inputs (and a law it carries) in ``P``; itself when
+    ``frame`` is None. Made once per potential and frame (kept on the potential)."""
+    if frame is None:
+        return potential
+    cache = potential.__dict__.setdefault("_principal", {}) if hasattr(potential, "__dict__") else {}
+    hit = cache.get(frame.key())
+    if hit is None:
+        hit = cache[frame.key()] = _rotated(potential, frame)
+    return hit
+
+
+def _rotated(potential, frame):
+    if type(potential) in (TorqueFree, GravityGradient):
+        return potential  # no body-fixed input: the moments come with the body
+    out = copy.copy(potential)
+    for k in ("_kernel_cache", "_principal"):
+        out.__dict__.pop(k, None)
+    if type(potential) is HeavyTop:
+        p = np.array(potential.params, dtype=np.float64)
+        p[1:] = frame.to_principal(p[1:])
+        p.flags.writeable = False
+        out.params = p
+        return out
+    if type(potential) is not EnvironmentTorques:
+        raise InputError(f"potential: {type(potential).__name__} has no known body-fixed inputs to turn into the "
+                         "principal frame of a full inertia tensor; give the inertia as principal moments")
+    for name in TERM_KEYWORDS:
+        if getattr(potential, name, None) is not None:
+            raise InputError(f"{name}: a torque term without a known frame change; give the inertia as principal "
+                             "moments")
+    out.facets = [Facet(f.area, frame.to_principal(f.normal), frame.to_principal(f.position.value) * f.position.unit,
+                        f.drag_coefficient, f.specular, f.diffuse) for f in potential.facets]
+    for name in ("residual_dipole", "constant_torque"):  # plain floats in their units (A m^2, N m)
+        v = getattr(potential, name)
+        if v is not None:
+            setattr(out, name, frame.to_principal(v.value) * v.unit if hasattr(v, "unit") else frame.to_principal(v))
+    out.control = principal_control(potential.control, frame)
+    return out
+
+
+def principal_run(body, state0, potential, control):
+    """``(frame, body, state0, potential, control)`` of a run in ``P``: the inputs of
+    :func:`orbatt.propagate` (``body`` a RigidBody or a list) turned into the principal frame
+    of their tensor, or returned as they are with ``frame`` None. ``control``: the law given
+    beside the potential (None when the potential carries it)."""
+    bodies = body if isinstance(body, (list, tuple)) else None
+    frame = frame_of(body) if (bodies is None or bodies) else None
+    if frame is None:
+        return None, body, state0, potential, control
+    pbody = [b.principal for b in bodies] if bodies is not None else body.principal
+    if not isinstance(state0, State):
+        raise InputError("state0: expected an orbatt.State (built with the body)")
+    if getattr(state0.body, "frame", None) is None or state0.body.frame.key() != frame.key() or (
+            bodies is not None and state0.body is not bodies[0] and state0.body.principal != pbody[0]):
+        raise InputError("state0: the state was built with another body than the one propagated (its body frame "
+                         "differs); build it with State(body, ...) of the body given by its inertia tensor")
+    pstate = frame.principal_state(state0)
+    return frame, pbody, pstate, principal_potential(potential, frame), principal_control(control, frame)
+
+
+def body_trajectory(tr, frame, body, potential, control):
+    """The trajectory ``tr`` of a run in ``P`` as the user's: ``q_B = q_P r~``, ``Q_B = Q_P r~``
+    and the user's ``body`` (the first of an ensemble), ``potential`` and ``control``; ``tr``
+    itself when ``frame`` is None. ``command`` (the flight software's held commands, kernel
+    state) stays in ``P``."""
+    if frame is None:
+        return tr
+    return dataclasses.replace(tr, body=body, potential=potential, control=control,
+                               q=frame.attitude_to_body(tr.q), Q=frame.attitude_to_body(tr.Q))
+
+
+def principal_trajectory(tr):
+    """A user's trajectory (body frame ``B``) in ``P`` for the kernels that derive the
+    Dataset's variables from it; ``tr`` itself for a body whose axes are principal."""
+    frame = getattr(tr.body, "frame", None)
+    if frame is None:
+        return tr
+    control = tr.control if tr.control is not getattr(tr.potential, "control", None) else None
+    pot = principal_potential(tr.potential, frame)
+    return dataclasses.replace(tr, body=tr.body.principal, potential=pot,
+                               control=principal_control(control, frame) if control is not None else getattr(pot, "control", None),
+                               q=frame.attitude_to_principal(tr.q), Q=frame.attitude_to_principal(tr.Q))
+
+
+def _columns(a, b, c):
+    return np.stack([a, b, c], axis=-1)
+
+
+def body_variables(body, data, coords):
+    """``(data, coords)`` (name -> :class:`~orbatt.dataset.content.Var`, computed in ``P``) in
+    the body frame of ``body``: body-axes variables (``frame = "B"``, an ``axis`` dimension)
+    times ``R``, the attitude family times ``r~`` (``q``, ``Q``, ``q_orbital``; ``euler_313``
+    and ``euler_321`` made again from them), ``inertia`` marked as the principal moments, and
+    the tensor recorded (``inertia_tensor``, ``principal_axes``). A body given by principal
+    moments: unchanged; a diagonal tensor only gets ``inertia_tensor``."""
+    from .dataset.content import Var
+
+    if body.tensor is None:
+        return data, coords
+    frame = body.frame
+    inertia = data["inertia"]
+    lead = inertia.dims[:-1]
+    tensor = np.broadcast_to(np.array(body.tensor), tuple(np.shape(inertia.values)[:-1]) + (3, 3))
+    data = dict(data)
+    data["inertia_tensor"] = Var(lead + ("axis", "axis_column"), np.array(tensor), {
+        "units": inertia.attrs["units"], "frame": "B",
+        "long_name": "inertia tensor about the centre of mass (body components)",
+        "comment": "as given ([body] inertia); off-diagonal entries I_xy = -integral of x y dm; "
+                   "I_B = R diag(inertia) R^T with R = principal_axes"})
+    if frame is None:
+        return data, coords
+    R = np.array(frame.R)
+    data["principal_axes"] = Var(("axis", "axis_column"), R, {
+        "units": "1", "long_name": "principal axes of inertia (columns, body components)",
+        "comment": "x_B = R x_P: column k is principal axis k, the axis of the principal moment inertia[k]; "
+                   "orbatt integrates in P and writes every body-axes variable in B"})
+    data["inertia"] = Var(inertia.dims, inertia.values, dict(inertia.attrs, frame="P", long_name=(
+        "principal moments of inertia (I1, I2, I3) about the principal axes (principal_axes)")))
+
+    def turned(variables):
+        out = {}
+        for name, var in variables.items():
+            if var.attrs.get("frame") == "B" and var.dims[-1:] == ("axis",) and name != "inertia_tensor":
+                var = Var(var.dims, frame.to_body(var.values), var.attrs)
+            elif name in ("q", "Q", "q_orbital"):
+                var = Var(var.dims, frame.attitude_to_body(var.values), var.attrs)
+            out[name] = var
+        return out
+
+    data, coords = turned(data), turned(coords)
+    e = data["euler_313"]
+    data["euler_313"] = Var(e.dims, _columns(*qt.to_euler313(data["q"].values)), e.attrs)
+    if "euler_321" in data:
+        e = data["euler_321"]
+        data["euler_321"] = Var(e.dims, _columns(*lvlh_angles(data["q_orbital"].values)), e.attrs)
+    return data, coords
