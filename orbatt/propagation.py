@@ -31,6 +31,7 @@ import numpy as np
 
 from .core import INTERPRETED
 from .errors import InputError, IntegrationError
+from .frame_boundary import body_trajectory, principal_run
 from .model_assembly import control_of, controller_start
 from .methods import METHODS, Method, methods, register
 from .methods.base import resolve_method
@@ -116,6 +117,11 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
         its ``t`` is the time reached, its ``trajectory`` what was computed until then.
     """
     cls = resolve_method(method)
+    user = (body, potential, control_of(potential, control))
+    # a body given by a full inertia tensor runs in its principal frame (orbatt.frame_boundary)
+    frame, body, state0, potential, control = principal_run(body, state0, potential,
+                                                            None if user[2] is getattr(potential, "control", None)
+                                                            else user[2])
     bodies, body_ensemble = bodies_of(body)
     y0, inertia, state_ensemble = initial_states(state0, bodies)
     ensemble = body_ensemble or state_ensemble
@@ -163,7 +169,8 @@ def propagate(body, state0, potential, t=None, *, t_span=None, method="dop853", 
                           settings=m.settings(), stats=stats, complete=complete,
                           continuation=_continuation(m, complete, resume))
 
-    return _run_chunks(m, problem, progress, result)
+    user_body = user[0][0] if isinstance(user[0], (list, tuple)) else user[0]
+    return _run_chunks(m, problem, progress, lambda *a: body_trajectory(result(*a), frame, user_body, *user[1:]))
 
 
 def _continued(state0, y0, z0):

@@ -163,6 +163,8 @@ class State:
         w = U.strip(omega, body.rate_unit, "omega", allow_plain=body.dimensionless)
         if w.shape[-1:] != (3,):
             raise InputError(f"omega: expected 3 body-axis components, got shape {w.shape}")
+        if body.frame is not None:  # a full inertia tensor (orbatt.body_frame): g = I_B omega (+ the rotors')
+            return cls(body, q, cn.momentum_from_body_momentum(q, body.momentum(w)))
         if body.wheels:  # a gyrostat: g = I omega + the rotors' relative momentum
             return cls(body, q, cn.momentum_from_body_momentum(q, body.inertia_value * w + body.rotor_momentum))
         return cls(body, q, cn.momentum_from_omega(q, w, body.inertia_value))
@@ -310,6 +312,8 @@ class State:
     def omega(self):
         """Body angular velocity (body components, rad per time unit); for a body with
         reaction wheels ``I^-1 (g - sum Iw speed a)`` with the wheels' initial speeds."""
+        if self.body.frame is not None:  # a full inertia tensor: computed in its principal frame, turned back
+            return self.body.frame.to_body(self.body.frame.principal_state(self).omega)
         if self.body.wheels and self.wheel_momenta is not None:  # J omega = g - sum h_k a_k, J = I - sum Iw a a^T
             axes = np.array([w.axis for w in self.body.wheels])
             J = np.diag(self.body.inertia_value) - sum(w.inertia * np.outer(w.axis, w.axis) for w in self.body.wheels)
@@ -326,6 +330,8 @@ class State:
 
     @property
     def kinetic_energy(self):
+        if self.body.frame is not None:  # a full inertia tensor: 1/2 g.I_B^-1 g, in its principal frame
+            return self.body.frame.principal_state(self).kinetic_energy
         return cn.kinetic_energy(self.q, self.Q, self.body.inertia_value)
 
     def euler(self):

@@ -57,6 +57,7 @@ from .. import quaternion as qt
 from .control import control_variables, wheel_coordinates
 from ..epoch import iso_epoch
 from ..errors import InputError
+from ..frame_boundary import body_variables, principal_trajectory
 from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
 from ..potentials import energy_and_torques, evaluate_members
@@ -369,7 +370,7 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
         Every derived quantity is computed with :mod:`orbatt.canonical`,
         :mod:`orbatt.quaternion` and ``potential.evaluate``; nothing is integrated here.
     """
-    tr = trajectory
+    tr = principal_trajectory(trajectory)  # a full inertia tensor: its principal frame (orbatt.frame_boundary)
     body = tr.body
     dimless = bool(body.dimensionless)
     U = DIMENSIONLESS_UNITS if dimless else INTERNAL_UNITS  # computed in these; SI at the end (si_form)
@@ -488,14 +489,15 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     data.update(extra)
     coords.update(wheel_coordinates(body, U))
 
-    pot_desc = _describe(tr.potential)
-    if tr.control is not None and "control" not in pot_desc:  # a law given beside the potential
-        pot_desc = {**pot_desc, "control": tr.control.describe()}
+    pot_desc = _describe(trajectory.potential)
+    if trajectory.control is not None and "control" not in pot_desc:  # a law given beside the potential
+        pot_desc = {**pot_desc, "control": trajectory.control.describe()}
     # the wheels' settings and limits (what the wheels figure draws: figure_data.wheel_limits)
-    wheels = {"wheels": to_json([w.describe() for w in body.wheels])} if body.wheels else {}
+    wheels = {"wheels": to_json([w.describe() for w in trajectory.body.wheels])} if body.wheels else {}
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=pot_desc,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title, **wheels)
+    data, coords = body_variables(trajectory.body, data, coords)  # back to the body frame of a tensor
     if not dimless:  # the Dataset boundary: the attitude family from kernel units to SI
         data, coords = si_form(data), si_form(coords)
     return Content(data, coords, attrs)

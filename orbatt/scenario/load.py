@@ -71,7 +71,8 @@ class Scenario:
         ctx = FieldContext(str(path) if path else spec.name)
         wheels = [reaction_wheel(w) for w in spec.control["wheels"]] if spec.control is not None else ()
         # u.Quantity(x, unit): what x * unit makes, in half the time
-        self.body = RigidBody(spec.inertia if spec.dimensionless else u.Quantity(spec.inertia, U.INERTIA), wheels=wheels)
+        inertia = spec.inertia if spec.inertia_tensor is None else spec.inertia_tensor  # a tensor: the body frame's
+        self.body = RigidBody(inertia if spec.dimensionless else u.Quantity(inertia, U.INERTIA), wheels=wheels)
         self.orbit = None
         kepler = period = None
         provider = spec.orbit["provider"] if spec.orbit is not None else None

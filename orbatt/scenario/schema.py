@@ -12,7 +12,8 @@ dimensional quantities is refused naming the first plain key)::
 
     name = "..."                  # optional; defaults to the file name
     description = "..."           # optional, one line
-    [body]        inertia = [I1, I2, I3]; heavy top: mass_g, center_of_mass = [x, y, z]
+    [body]        inertia = [I1, I2, I3] | 3x3 tensor | [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (body frame);
+                  heavy top: mass_g, center_of_mass = [x, y, z]
     [initial]     q = [...] and Q = [...]
                   | q = [...] or euler_313 = [phi, theta, psi], with omega = [w1, w2, w3]
                   | euler_313 with euler_momenta = [Phi, Theta, Psi]
@@ -63,6 +64,7 @@ from ..body import RigidBody
 from ..control import reaction_wheel
 from ..errors import InputError
 from ..epoch import parse_epoch
+from .inertia_schema import check_sweep, parse_inertia
 from .key_docs import parse_key_docs
 from .ranges import RANGES
 from .fields import (FieldContext, check_integers, parse_choice, parse_int, parse_plain_vector, parse_quantity, parse_time,
@@ -106,9 +108,22 @@ name         text  the file name  the scenario's name (Dataset title, `orbatt sc
 description  text  ""             one line saying what the study is
 
 [body]
-inertia         mass x length^2, 3 values  required                principal moments [I1, I2, I3] about body axes 1,
-                                                                   2, 3; plain numbers make the scenario
-                                                                   dimensionless (normalized units)
+inertia         mass x length^2, 3/6/3x3   required                principal moments [I1, I2, I3] about body axes 1,
+                                                                   2, 3; or the inertia tensor about the centre of
+                                                                   mass in the body (mechanical) frame, as CAD gives
+                                                                   it: a 3x3 matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy,
+                                                                   Iyz], [Ixz, Iyz, Izz]] or six values [Ixx, Iyy,
+                                                                   Izz, Ixy, Ixz, Iyz], the off-diagonal entries
+                                                                   being the matrix's (I_xy = -∫ x y dm, products
+                                                                   of inertia with their minus sign); a tensor that
+                                                                   is not diagonal is integrated in its principal
+                                                                   axes while every body-fixed key and every
+                                                                   body-axes output stays in the body frame
+                                                                   (docs/design.md §8, orbatt.body_frame); it has
+                                                                   positive principal moments that satisfy the
+                                                                   triangle inequality, and cannot be swept; plain
+                                                                   numbers make the scenario dimensionless
+                                                                   (normalized units)
 mass_g          force                      required for heavy-top  weight M g of the heavy top
 center_of_mass  length, 3 values           required for heavy-top  centre of mass in body axes, relative to the
                                                                    fixed point
@@ -266,6 +281,7 @@ class Spec:
     sweep: SweepSpec | None = None  # the [sweep] table, if any
     torques: dict | None = None  # [torques], [environment] and the facets (torques_schema.py)
     control: dict | None = None  # [control] and the wheels, plain settings (control_schema.py)
+    inertia_tensor: np.ndarray | None = None  # [body] inertia given as a tensor (body frame; inertia: its moments)
 
 
 def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
@@ -285,17 +301,9 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     _check_keys(ctx, data)
     body = data["body"]
     if "inertia" not in body:
-        raise ctx.error("[body] inertia", "missing; give the principal moments [I1, I2, I3]")
-    inertia_raw = body["inertia"]
-    if not isinstance(inertia_raw, list) or len(inertia_raw) != 3:
-        raise ctx.error("[body] inertia", f"expected [I1, I2, I3], got {inertia_raw!r}")
-    dimless = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in inertia_raw)
-    inertia = parse_vector(ctx, "[body] inertia", inertia_raw, 3, U.INERTIA, dimensionless=dimless,
-                           bounds=None if dimless else RANGES["body", "inertia"])
-    try:  # the body's own validation (positive, triangle inequality), reported with the file
-        RigidBody(inertia if dimless else inertia * U.INERTIA)
-    except InputError as exc:
-        raise ctx.error("[body] inertia", f"{inertia_raw!r}: {exc}") from None
+        raise ctx.error("[body] inertia", "missing; give the principal moments [I1, I2, I3] (or the tensor)")
+    # principal moments, or a tensor in the body frame (scenario/inertia_schema.py), validated by RigidBody
+    dimless, inertia, tensor = parse_inertia(ctx, body["inertia"], RANGES["body", "inertia"])
 
     pot = data["potential"]
     kind = parse_choice(ctx, "[potential] kind", pot.get("kind"), POTENTIAL_KINDS)
@@ -342,7 +350,8 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     control = parse_control(ctx, data, kind, orbit, dimless, integ["method"])
     if control is not None and control["wheels"]:
         try:  # the gyrostat must keep inertia about every axis
-            RigidBody(inertia * U.INERTIA, wheels=[reaction_wheel(w) for w in control["wheels"]])
+            RigidBody((inertia if tensor is None else tensor) * U.INERTIA,
+                      wheels=[reaction_wheel(w) for w in control["wheels"]])
         except InputError as exc:
             raise ctx.error("[[body.wheels]] inertia", str(exc).split(": ", 1)[-1]) from None
     sweep = None
@@ -351,13 +360,14 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
                                   frame=frame, conservative=control is None and torques is None,
                                   control=None if control is None else control["control"],
                                   wheels=0 if control is None else len(control["wheels"]), data=data)
+        check_sweep(ctx, sweep, tensor)
     name = data.get("name", Path(source).stem)
     desc = data.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):
         raise ctx.error("name/description", "must be strings")
     return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
                 potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
-                integration=integ, sweep=sweep, torques=torques, control=control)
+                integration=integ, sweep=sweep, torques=torques, control=control, inertia_tensor=tensor)
 
 
 def _check_normalized_orbit(ctx, o):
