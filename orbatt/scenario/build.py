@@ -16,6 +16,7 @@ from astropy import units as u
 from .. import quaternion as qt
 from .. import units as U
 from ..laws import control_law
+from .sensors_schema import attach_navigation
 from ..errors import InputError, IntegrationError, ScenarioError
 from ..methods.problem import DEFAULT_MAX_STEPS
 from ..orbits import KeplerOrbit, ReboundOrbit, TleOrbit
@@ -121,7 +122,13 @@ def environment_margin(spec):
     return sample_margin(drag=tq is not None and tq["drag"], srp=tq is not None and tq["srp"],
                          magnetic=(tq is not None and tq["residual_dipole"] is not None)
                          or (c is not None and c["magnetic_field"] is not None),
-                         sun=law.get("target") == "sun")
+                         sun=law.get("target") == "sun" or _reads_sun(c))
+
+
+def _reads_sun(c):
+    """Whether the star tracker of ``[sensors]`` reads the Sun (its exclusion angle)."""
+    st = ((c or {}).get("navigation") or {}).get("star_tracker")
+    return st is not None and st["sun_exclusion"] is not None
 
 
 def check_field_span(ctx, spec, t_end):
@@ -187,7 +194,7 @@ def build_environment_torques(spec, orbit, t_end):
     if tq["residual_dipole"] is not None:
         field = IGRFField() if env["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     law = None if spec.control is None else spec.control["control"]
-    control = None if law is None else control_law(law)
+    control = None if law is None else attach_navigation(control_law(law), spec.control.get("navigation"))
     if field is None and spec.control is not None and spec.control["magnetic_field"] is not None:
         field = IGRFField() if spec.control["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     gg = spec.potential_kind == "gravity-gradient"
@@ -206,7 +213,7 @@ def build_control(spec, orbit, t_end):
     if c["magnetic_field"] is not None:
         field = IGRFField() if c["magnetic_field"] == "igrf" else DipoleField(orbit.epoch)
     return EnvironmentTorques(orbit, t_end * u.s, gravity_gradient=True, magnetic_field=field,
-                              control=control_law(c["control"]))
+                              control=attach_navigation(control_law(c["control"]), c.get("navigation")))
 
 
 def build_potential(spec, orbit, t_end=None):

@@ -72,6 +72,7 @@ from .fields import (FieldContext, check_integers, parse_choice, parse_int, pars
 from .sweep_schema import SweepSpec, parse_sweep_table
 from .binary_schema import BinarySpec, is_binary, parse_binary
 from .control_schema import CONTROL_KEYS, parse_control
+from .sensors_schema import FEEDBACK_DOC, SENSOR_KEY_DOCS, SENSOR_TABLES, parse_navigation
 from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
 from ..methods.dop853 import INDEPENDENT_VARIABLES
@@ -95,7 +96,9 @@ TABLES = {
     "sweep": None,  # keys checked by parse_sweep_table (sweep_schema.py)
     "torques": TORQUE_KEYS,  # validated by parse_torques (torques_schema.py)
     "environment": ENVIRONMENT_KEYS,
-    "control": CONTROL_KEYS,  # validated by parse_control (control_schema.py)
+    "control": CONTROL_KEYS | {"feedback"},  # validated by parse_control (control_schema.py); feedback below
+    "sensors": SENSOR_TABLES["sensors"],  # validated by parse_navigation (sensors_schema.py)
+    "estimator": SENSOR_TABLES["estimator"],
 }
 #: what each key of :data:`TABLES` is: ``(dimension, default, meaning)``, written as a table
 #: (:mod:`orbatt.scenario.key_docs`); ``docs/scenarios.md`` is generated from it by
@@ -234,6 +237,8 @@ max_steps    plain integer       1e8 (the bound)                 most step attem
 KEY_DOCS["torques"] = torque_key_docs()
 KEY_DOCS["control"] = control_key_docs()
 KEY_DOCS["control.modes"] = mode_key_docs()
+KEY_DOCS["control"]["feedback"] = FEEDBACK_DOC
+KEY_DOCS.update(SENSOR_KEY_DOCS)
 REQUIRED_TABLES = ("body", "initial", "potential", "integration")
 #: central body radii (km) below which an apoapsis is refused
 BODY_RADII = {"earth": R_EARTH}
@@ -347,7 +352,13 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     initial = _parse_initial(ctx, init, dimless)
 
     integ = _parse_integration(ctx, data["integration"], dimless, orbit)
-    control = parse_control(ctx, data, kind, orbit, dimless, integ["method"])
+    ctl_data = data  # [control] feedback belongs to the sensors (sensors_schema.py), not to a law
+    if isinstance(ctl, dict) and "feedback" in ctl:
+        ctl_data = {**data, "control": {k: v for k, v in ctl.items() if k != "feedback"}}
+    control = parse_control(ctx, ctl_data, kind, orbit, dimless, integ["method"])
+    navigation = parse_navigation(ctx, data, None if control is None else control["control"], orbit)
+    if navigation is not None:
+        control["navigation"] = navigation
     if control is not None and control["wheels"]:
         try:  # the gyrostat must keep inertia about every axis
             RigidBody((inertia if tensor is None else tensor) * U.INERTIA,

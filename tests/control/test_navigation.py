@@ -1,0 +1,281 @@
+"""Sensors with noise and the MEKF in the flight software's tick (issue 33 items 1-3): the
+counter-based noise, the filter's steady state against the discrete Riccati solution, its
+consistency (NEES) over a Monte Carlo, the bias's convergence, seeded bits across resumes and
+ensembles, the star tracker's exclusions, and the law acting on the estimate."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from astropy import units as u
+from scipy import stats
+from scipy.linalg import solve_discrete_are
+
+import orbatt
+from orbatt import quaternion as qt
+from orbatt.core import estimator as ke
+from orbatt.core import noise
+from orbatt.dataset.navigation import navigation_column
+from orbatt.errors import InputError
+from orbatt.model_assembly import assemble
+from orbatt.sensors import MEKF, Gyro, Navigation, StarTracker, with_navigation
+
+I_B = np.array([0.03, 0.04, 0.02]) * u.kg * u.m**2
+ARW = 0.15 * u.deg / u.h**0.5
+RRW = 0.3 * u.deg / u.h**1.5
+BIAS = [5.0, -3.0, 2.0] * u.deg / u.h
+ST = 10 * u.arcsec
+SV = ARW.to_value(u.rad / u.s**0.5)
+SU = RRW.to_value(u.rad / u.s**1.5)
+SIG = ST.to_value(u.rad)
+
+
+def _nav(seed=20261128, case=0, feedback=None, st_rate=1 * u.Hz, **st):
+    return Navigation(seed, case=case, gyro=Gyro(10 * u.Hz, ARW, RRW, BIAS),
+                      star_tracker=StarTracker(st_rate, ST, **st), estimator=MEKF(0.1 * u.deg, 10 * u.deg / u.h),
+                      feedback=feedback)
+
+
+def _idle_law(nav):
+    """A law that commands nothing (kp = kd = 0) at 10 Hz, carrying the sensors ``nav``."""
+    law = orbatt.PDControl("inertial", kp=0 * u.N * u.m, kd=0 * u.N * u.m * u.s, target_q=[1, 0, 0, 0],
+                           period=0.1 * u.s)
+    return with_navigation(law, nav)
+
+
+def _at_rest(times, nav, **kw):
+    body = orbatt.RigidBody(I_B)
+    state = orbatt.State.from_omega(body, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0] * u.rad / u.s)
+    law = _idle_law(nav)
+    tr = orbatt.propagate(body, state, orbatt.TorqueFree(), times, control=law, rtol=1e-10, **kw)
+    return body, law, tr
+
+
+def _P(tr, body, law):
+    """The filter's covariances (N, 6, 6) along the outputs, from the run's discrete state."""
+    col, _ = navigation_column(assemble(orbatt.TorqueFree(), [body], law), 0)
+    z = np.asarray(tr.command)
+    return z[..., col + ke.STATE.P:col + ke.STATE.P + 36].reshape(z.shape[:-1] + (6, 6))
+
+
+def test_noise_is_the_counter_based_generator_and_standard_normal():
+    """The compiled generator equals its plain-Python copy bit for bit, and its deviates are
+    standard normal (Kolmogorov-Smirnov on 20,000 keys) and independent across channels."""
+    from numba import njit
+
+    @njit
+    def draw(n, channel):
+        out = np.empty(n)
+        for i in range(n):
+            out[i] = noise.normal(7.0, 3.0, 1.0, float(i), channel)
+        return out
+
+    x = draw(20000, 0.0)
+    for i in (0, 1, 17, 19999):
+        assert x[i] == noise.normal_reference(7, 3, 1, i, 0)
+    assert stats.kstest(x, "norm").pvalue > 1e-3
+    y = draw(20000, 1.0)
+    assert abs(np.corrcoef(x, y)[0, 1]) < 0.03
+    assert noise.normal_reference(8, 3, 1, 0, 0) != noise.normal_reference(7, 3, 1, 0, 0)
+    assert noise.normal_reference(7, 4, 1, 0, 0) != noise.normal_reference(7, 3, 1, 0, 0)
+
+
+def _axis_model():
+    """The single-axis (angle, bias) model of a body at rest with an isotropic star tracker:
+    the gyro step (0.1 s) ``F, Qd`` and the update (the axes decouple)."""
+    dt = 0.1
+    Fs = np.array([[1.0, -dt], [0.0, 1.0]])
+    Qs = np.array([[SV**2 * dt + SU**2 * dt**3 / 3, -SU**2 * dt**2 / 2], [-SU**2 * dt**2 / 2, SU**2 * dt]])
+    H = np.array([[1.0, 0.0]])
+
+    def update(P):
+        return P - P @ H.T @ np.linalg.inv(H @ P @ H.T + SIG**2) @ H @ P
+
+    return Fs, Qs, H, update
+
+
+def _riccati():
+    """The a priori and a posteriori steady-state covariances over one star tracker interval
+    (10 gyro steps): scipy's discrete algebraic Riccati solution."""
+    Fs, Qs, H, update = _axis_model()
+    F, Q = np.eye(2), np.zeros((2, 2))
+    for _ in range(10):
+        F, Q = Fs @ F, Fs @ Q @ Fs.T + Qs
+    prior = solve_discrete_are(F.T, H.T, Q, np.array([[SIG**2]]))
+    return prior, update(prior)
+
+
+def test_steady_state_covariance_is_the_discrete_riccati_solution():
+    """A body at rest, an isotropic star tracker: each axis' covariance follows the single-axis
+    (angle, bias) Kalman recursion from the same start (to 1e-7: the estimated rate, ~1e-5 rad/s of noise, couples the axes a little), and its steady state after
+    an update is the discrete algebraic Riccati solution (scipy): the attitude within 0.1 %
+    after 900 s (the issue asks 5 %; the design's example: 3.7e-5 rad); the bias converges
+    more slowly (the recursion reaches the Riccati value: checked on the recursion itself)."""
+    times = np.arange(0.0, 1201.0, 1.0)  # on the star tracker's ticks: after its updates
+    body, law, tr = _at_rest(times, _nav())
+    P = _P(tr, body, law)
+    Fs, Qs, _, update = _axis_model()
+    Pk = update(np.diag([np.radians(0.1) ** 2, (10 * u.deg / u.h).to_value(u.rad / u.s) ** 2]))
+    ref = [Pk]
+    for _ in range(times.size - 1):
+        for _ in range(10):
+            Pk = Fs @ Pk @ Fs.T + Qs
+        Pk = update(Pk)
+        ref.append(Pk)
+    ref = np.array(ref)
+    for i in range(3):
+        np.testing.assert_allclose(P[:, i, i], ref[:, 0, 0], rtol=1e-7)
+        np.testing.assert_allclose(P[:, 3 + i, 3 + i], ref[:, 1, 1], rtol=1e-7)
+        np.testing.assert_allclose(P[:, i, 3 + i], ref[:, 0, 1], rtol=1e-7)
+    _, post = _riccati()
+    late = times >= 900
+    for i in range(3):
+        np.testing.assert_allclose(P[late, i, i], post[0, 0], rtol=1e-3)
+    for _ in range(200000):  # the recursion's own steady state: the Riccati solution
+        for _ in range(10):
+            Pk = Fs @ Pk @ Fs.T + Qs
+        Pk = update(Pk)
+    np.testing.assert_allclose(Pk, post, rtol=1e-6)
+    assert 3.6e-5 < math.sqrt(post[0, 0]) < 3.8e-5
+    ds = orbatt.to_dataset(tr)
+    np.testing.assert_allclose(ds["knowledge_sigma"].values[late], math.sqrt(post[0, 0]), rtol=1e-3)
+
+
+def test_nees_is_consistent_and_the_bias_converges():
+    """24 noise cases of 300 s: the normalized estimation error squared of the 6-state error
+    (attitude, bias), averaged over the cases at each star tracker tick after the start-up,
+    stays within its chi-square 99 % bounds at >= 95 % of the ticks."""
+    times = np.arange(0.0, 301.0, 1.0)
+    n = 24
+    nees = []
+    for case in range(n):
+        body, law, tr = _at_rest(times, _nav(case=case))
+        ds = orbatt.to_dataset(tr)
+        e = np.concatenate([ds["knowledge_error"].values,
+                            ds["gyro_bias"].values - ds["bias_estimate"].values], axis=1)
+        P = _P(tr, body, law)
+        nees.append(np.einsum("ti,tij,tj->t", e, np.linalg.inv(P), e))
+    mean = np.mean(nees, axis=0)[30:]
+    lo, hi = stats.chi2.ppf([0.005, 0.995], 6 * n) / n
+    inside = np.mean((mean > lo) & (mean < hi))
+    assert inside >= 0.95, (inside, mean.min(), mean.max(), lo, hi)
+    assert 5.0 < mean.mean() < 7.0
+
+
+def test_the_bias_estimate_converges():
+    """Over 3,000 s the bias error falls from the initial 5 deg/h scale by more than 5x, stays
+    within 3 sigma of the filter's covariance late in the run, and the covariance falls too."""
+    times = np.arange(0.0, 3001.0, 10.0)
+    body, law, tr = _at_rest(times, _nav())
+    ds = orbatt.to_dataset(tr)
+    b_err = np.linalg.norm(ds["gyro_bias"].values - ds["bias_estimate"].values, axis=1)
+    P = _P(tr, body, law)
+    sig_b = np.sqrt(np.einsum("tii->t", P[:, 3:, 3:]))
+    late = times >= 2000
+    assert np.all(b_err[late] < 3 * sig_b[late])
+    assert b_err[late].max() < b_err[0] / 5
+    assert sig_b[-1] < sig_b[0] / 5
+
+
+def test_same_seed_same_bits_another_seed_other_noise_and_resume_is_bitwise(monkeypatch):
+    """The noise is a function of (seed, case, sensor, tick): the same run twice is bitwise; a
+    run stopped every step attempt (pause/resume) too; another seed or case gives other noise."""
+    times = np.arange(0.0, 601.0, 25.0)  # > 5,000 steps: the first call's budget
+    _, _, a = _at_rest(times, _nav())
+    _, _, b = _at_rest(times, _nav())
+    np.testing.assert_array_equal(a.command, b.command)
+    import orbatt.propagation as prop
+
+    monkeypatch.setattr(prop, "CHUNK_SECONDS", 1e-9)
+    calls = []
+    _, _, c = _at_rest(times, _nav(), progress=lambda info: calls.append(info.t) or True)
+    assert len(calls) > 100
+    np.testing.assert_array_equal(c.command, a.command)
+    np.testing.assert_array_equal(c.q, a.q)
+    monkeypatch.undo()
+    _, _, d = _at_rest(times, _nav(seed=1))
+    _, _, e = _at_rest(times, _nav(case=1))
+    assert not np.array_equal(d.command, a.command) and not np.array_equal(e.command, a.command)
+
+
+def test_gyro_and_star_tracker_follow_their_models():
+    """The gyro's bias performs its random walk from the given bias; its measurement minus the
+    true rate and bias has the per-sample sigma sqrt(sv^2/dt + su^2 dt/12); the star tracker's
+    measurement error has 10 arcsec per axis."""
+    times = np.arange(0.0, 2000.0, 0.5)
+    _, _, tr = _at_rest(times, _nav(feedback="truth"))
+    ds = orbatt.to_dataset(tr)
+    beta = ds["gyro_bias"].values
+    np.testing.assert_allclose(beta[0], BIAS.to_value(u.rad / u.s), rtol=0, atol=SU * math.sqrt(0.1) * 5)
+    steps = np.diff(beta[::2], axis=0)  # over 1 s: 10 gyro steps
+    np.testing.assert_allclose(np.std(steps), SU * 1.0, rtol=0.05)
+    noise_w = ds["gyro_measurement"].values - ds["omega"].values - beta
+    dt = 0.1
+    # the sample's bias is the mean of the two ends (Farrenkopf), within su sqrt(dt) of beta
+    np.testing.assert_allclose(np.std(noise_w), math.sqrt(SV**2 / dt + SU**2 * dt / 12), rtol=0.03)
+
+
+def test_star_tracker_exclusion_leaves_the_filter_on_the_gyro():
+    """An Earth exclusion the boresight can never leave (179 deg) on an orbit: no measurement,
+    the attitude sigma grows as the gyro's random walk; without exclusion it stays bounded."""
+    orbit = orbatt.KeplerOrbit(a=6878.137 * u.km, e=0.001, i=97.4 * u.deg, raan=0 * u.deg, argp=0 * u.deg)
+    body = orbatt.RigidBody(I_B)
+    state = orbatt.State.from_omega(body, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0] * u.rad / u.s)
+    times = np.arange(0.0, 301.0, 10.0)
+    gg = orbatt.GravityGradient(orbit)
+    out = {}
+    for ex in (None, 179 * u.deg):
+        law = _idle_law(_nav(feedback="truth", earth_exclusion=ex))
+        tr = orbatt.propagate(body, state, gg, times, control=law, rtol=1e-10)
+        out[ex is None] = orbatt.to_dataset(tr)
+    blind, seeing = out[False], out[True]
+    assert blind["star_tracker_valid"].values.sum() == 0
+    assert seeing["star_tracker_valid"].values.all()
+    sig = blind["knowledge_sigma"].values[:, 0]
+    assert np.all(np.diff(sig) > 0) and sig[-1] > 10 * seeing["knowledge_sigma"].values[-1, 0]
+
+
+def test_law_on_the_estimate_points_within_the_knowledge_error():
+    """A PD law holding an inertial attitude on the estimate: the true pointing error is of the
+    order of the knowledge error (tens of arcsec; the gyro's rate noise through kd adds to it),
+    and the same run with feedback = 'truth' points ten times better."""
+    body = orbatt.RigidBody(I_B)
+    target = qt.normalize(np.array([1.0, 0.01, -0.02, 0.005]))
+    state = orbatt.State.from_omega(body, target, [0.0, 0.0, 0.0] * u.rad / u.s)
+    times = np.arange(0.0, 301.0, 1.0)
+    res = {}
+    for fb in ("estimate", "truth"):
+        law = orbatt.PDControl("inertial", kp=2e-3 * u.N * u.m, kd=2e-2 * u.N * u.m * u.s, target_q=target,
+                               period=0.1 * u.s)
+        with_navigation(law, _nav(feedback=fb))
+        tr = orbatt.propagate(body, state, orbatt.TorqueFree(), times, control=law, rtol=1e-10)
+        d = qt.mul(qt.conj(target), tr.q)
+        res[fb] = (2 * np.arctan2(np.linalg.norm(d[:, 1:], axis=1), np.abs(d[:, 0])), orbatt.to_dataset(tr))
+    err_est, ds = res["estimate"]
+    err_true, _ = res["truth"]
+    know = np.linalg.norm(ds["knowledge_error"].values, axis=1)
+    late = times >= 100
+    rms = np.sqrt(np.mean(err_est[late] ** 2))
+    # the gyro's noise through kd adds to the knowledge error (measured: 3.3x the knowledge rms)
+    assert 0.5 * np.sqrt(np.mean(know[late] ** 2)) < rms < 10 * np.sqrt(np.mean(know[late] ** 2))
+    assert np.sqrt(np.mean(err_true[late] ** 2)) < 0.1 * rms
+
+
+def test_inputs_are_checked_where_they_enter():
+    with pytest.raises(InputError, match="integer multiple"):
+        _nav(st_rate=3 * u.Hz)
+    with pytest.raises(InputError, match="gyro"):
+        Navigation(1, star_tracker=StarTracker(1 * u.Hz, ST), estimator=MEKF(0.1 * u.deg, 1 * u.deg / u.h))
+    with pytest.raises(InputError, match="estimator"):
+        Navigation(1, gyro=Gyro(10 * u.Hz, ARW), feedback="estimate")
+    with pytest.raises(InputError, match="period"):
+        with_navigation(orbatt.PDControl("inertial", kp=1 * u.N * u.m, kd=1 * u.N * u.m * u.s,
+                                         target_q=[1, 0, 0, 0]), _nav())
+    with pytest.raises(InputError, match="multiple"):
+        with_navigation(orbatt.PDControl("inertial", kp=1 * u.N * u.m, kd=1 * u.N * u.m * u.s,
+                                         target_q=[1, 0, 0, 0], period=0.25 * u.s), _nav())
+    with pytest.raises(InputError, match="seed"):
+        Navigation(-1, gyro=Gyro(10 * u.Hz, ARW))
+    with pytest.raises(InputError, match="rate"):
+        Gyro(10 * u.m, ARW)
