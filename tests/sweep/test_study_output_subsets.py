@@ -53,6 +53,8 @@ SCENARIOS = {
 }
 for _name, (_, _, _keys) in SCENARIOS.items():  # slew_time reads settling_time's threshold
     _keys["slew_time"] = _keys["settling_time"]
+    # the mean and relative pointing indices read the stability window (a plain number: normalized time)
+    _keys["rpe"] = _keys["mpe"] = "stability_window = 0.2" if _name == "torque-free" else 'stability_window = "100 s"'
 #: the variables each output writes (its descriptor's)
 VARIABLES = {k: o.names for k, o in SWEEP_OUTPUTS.items()}
 
