@@ -84,6 +84,13 @@ def markdown() -> str:
             lines += ["### `[[body.wheels]]`", "", "One table per reaction wheel (with `[control]`, or free "
                       "wheels).", ""]
             lines += _table(((k, KEY_DOCS["body.wheels"][k]) for k in KEY_DOCS["body.wheels"]), "body.wheels") + [""]
+        if table == "sensors":
+            lines += ["The flight software's noisy sensors (issue 33; `docs/flight-software.md`): they sample the "
+                      "state at their ticks, before the mode logic and the laws, and feed the `[estimator]`. Every "
+                      "random number is a function of (seed, case, sensor, tick, axis).", ""]
+            for sub in ("sensors.gyro", "sensors.star_tracker"):
+                lines += [f"### `[{sub}]`", ""]
+                lines += _table(((k, KEY_DOCS[sub][k]) for k in KEY_DOCS[sub]), sub) + [""]
         if table == "control":
             lines += ["### `[[control.modes]]`", "", "A sequence of modes run by the flight software (instead of "
                       "`law`; needs `period`): each mode's law acts until its condition holds at a tick, then the "

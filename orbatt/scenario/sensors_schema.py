@@ -36,9 +36,9 @@ star_tracker  table                 none      [sensors.star_tracker]
 
 [sensors.gyro]
 rate  frequency                   required  sampling rate: the base tick of the sensors and the filter
-arw   angle / time^(1/2)          required  angle random walk sigma_v (e.g. '0.15 deg/sqrt(h)'): rate noise
+arw   noise density, angle / time^(1/2)  required  angle random walk sigma_v (e.g. '0.15 deg/sqrt(h)'): rate noise
                                             sigma_v / sqrt(dt) per sample
-rrw   angle / time^(3/2)          0         rate random walk sigma_u of the bias (e.g. '0.3 deg / h(3/2)')
+rrw   noise density, angle / time^(3/2)  0         rate random walk sigma_u of the bias (e.g. '0.3 deg / h(3/2)')
 bias  angular rate, 3 values      0         the true bias at the start (body axes)
 
 [sensors.star_tracker]
