@@ -2,7 +2,7 @@
 
 Contract (other tools call these; keep the names)::
 
-    orbatt run SCENARIO.toml [-o OUT.nc] [--plot DIR] [--aem FILE] [--method M] [--quiet]
+    orbatt run SCENARIO.toml [-o OUT.nc] [--plot DIR] [--aem FILE] [--method M] [--append] [--quiet]
     orbatt sweep SCENARIO.toml [-o OUT.nc] [--scheduler ADDRESS] [--workers N] [--chunk-size N]
                  [--worker-timeout SECONDS] [--resume] [--seed S] [--quiet]
     orbatt info OUT.nc
@@ -49,6 +49,9 @@ def _parser():
     r.add_argument("--aem", metavar="FILE", help="also write the attitude q as a CCSDS AEM (needs an epoch; "
                                                  "as 'orbatt export' with its defaults)")
     r.add_argument("--method", help="override [integration] method")
+    r.add_argument("--append", action="store_true", help="continue the run in OUTPUT from its last sample to this "
+                   "scenario's t_end and append the new samples (the flight software's state and the step loop's "
+                   "memory come from the file: bitwise the single run)")
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     r.add_argument("--yes", action="store_true", help="agree to a run the work estimate finds long (minutes)")
 
@@ -119,6 +122,10 @@ def _run(args, cold):
 
     sc = load_scenario(args.scenario, yes=args.yes)
     out = _output_path(args, sc)
+    if getattr(args, "append", False) and out.exists():  # continue the file's run (its last sample's state)
+        from .dataset.file_checks import continued_scenario
+
+        sc = continued_scenario(out, sc)
     aem = _aem_path(args, sc, out)
     stem = _plot_stem(args, sc, {"-o": out, "--aem": aem})
     t0 = time.perf_counter()
@@ -154,10 +161,15 @@ def _run(args, cold):
                   file=sys.stderr)
         return cold.rerun_compiled(args.argv, stream=None if args.quiet or cold.projected is None else sys.stderr)
     wall = time.perf_counter() - t0
-    write_netcdf(content, out)
+    appended = getattr(args, "append", False) and out.exists()
+    write_netcdf(content, out, append=appended)
     if not args.quiet:
-        print(summary(content, title=f"{sc.name} -> {out}", wall=wall))
-    ds = content.to_dataset() if aem is not None or args.plot else content
+        print(summary(content, title=f"{sc.name} -> {out}" + (" (appended)" if appended else ""), wall=wall))
+    if appended and (aem is not None or args.plot):  # the figures and the AEM of the whole run
+        from .dataset import open_dataset
+
+        content = open_dataset(out, load=True)
+    ds = content.to_dataset() if (aem is not None or args.plot) and hasattr(content, "to_dataset") else content
     if aem is not None:
         write_aem(ds, aem)
         if not args.quiet:

@@ -88,6 +88,17 @@ def _plain(v):
     return a.tolist()
 
 
+def continuation_text(trajectory):
+    """The JSON text of the :class:`State` a run continues from after ``trajectory``'s last output
+    (:meth:`State.record`; the NetCDF global attribute ``continuation``), or None where there is
+    none to give: an ensemble, no output, a body given by a full inertia tensor (its Dataset is
+    in the body frame, its run in the principal one)."""
+    tr = trajectory
+    if tr.q.ndim != 2 or tr.t.shape[0] == 0 or getattr(tr.body, "frame", None) is not None:
+        return None
+    return json.dumps(State.of_trajectory(tr).record(), allow_nan=False)
+
+
 class State:
     """Canonical state ``(q, Q)`` (paper Sect. 3), validated.
 

@@ -106,3 +106,63 @@ def _slice(tr, k):
         v = getattr(tr, name)
         setattr(p, name, v[k:])
     return p
+
+
+def _data(path):
+    with open_dataset(path, load=True) as ds:
+        return {k: v.values for k, v in ds.variables.items()}, dict(ds.attrs)
+
+
+@pytest.fixture(scope="module")
+def single_file(tmp_path_factory):
+    d = tmp_path_factory.mktemp("fsw-single")
+    (d / "full.toml").write_text(_text("4 s"))
+    assert main(["run", str(d / "full.toml"), "-o", str(d / "single.nc"), "--quiet"]) == 0
+    return d
+
+
+@pytest.mark.parametrize("split", ["2.5 s", "2.25 s"], ids=["on-a-tick", "between-ticks"])
+def test_orbatt_run_append_continues_the_file_bitwise(single_file, tmp_path, split, capsys):
+    """``orbatt run`` to ``T``, then ``orbatt run --append`` of the same scenario to 4 s: the
+    file equals the single run's on every variable (the mode sequence's ``mode`` and
+    ``mode_entry_time``, the wheels' torques, the integral's effect), bit for bit."""
+    first, full, out = tmp_path / "first.toml", single_file / "full.toml", tmp_path / "split.nc"
+    first.write_text(_text(split))
+    assert main(["run", str(first), "-o", str(out), "--quiet"]) == 0
+    part, attrs = _data(out)
+    rec = json.loads(attrs["continuation"])
+    assert rec["t"] == float(split.split()[0]) and rec["phase"] == 0.0 and rec["period"] == PERIOD
+    assert main(["run", str(full), "-o", str(out), "--append", "--quiet"]) == 0
+    got, attrs = _data(out)
+    want, attrs_single = _data(single_file / "single.nc")
+    assert set(got) == set(want)
+    for name in want:
+        np.testing.assert_array_equal(got[name], want[name], err_msg=name)
+    # the state at the end, to continue from again (the step proposal in it is the first run's
+    # initial step, capped by its shorter span and kept by every landing on a tick: not compared)
+    end, end_single = json.loads(attrs["continuation"]), json.loads(attrs_single["continuation"])
+    assert end["t"] == end_single["t"] == 4.0 and end["y"] == end_single["y"]
+    assert attrs["scenario"] == attrs_single["scenario"] and attrs["potential"] == attrs_single["potential"]
+    assert set(want["mode"].tolist()) == {0, 1} and part["time"].size < want["time"].size
+    # a third --append has nothing left to run: refused, naming the fix
+    capsys.readouterr()
+    assert main(["run", str(full), "-o", str(out), "--append", "--quiet"]) == 2
+    assert re.search(r"already ends at t = 4\.0 s.*later \[integration\] t_end", capsys.readouterr().err)
+
+
+def test_append_refuses_another_run(single_file, tmp_path, capsys):
+    """The file's run and the scenario must differ in ``t_end`` only."""
+    other = tmp_path / "other.toml"
+    other.write_text(_text("6 s").replace('kp = "4e-3 N m"', 'kp = "5e-3 N m"', 1))
+    out = tmp_path / "copy.nc"
+    out.write_bytes((single_file / "single.nc").read_bytes())
+    assert main(["run", str(other), "-o", str(out), "--append", "--quiet"]) == 2
+    assert "holds a run of another scenario" in capsys.readouterr().err
+
+
+def test_a_state_continues_from_its_own_time(single):
+    sc, one = single
+    state = one.state(8)  # t = 2 s: no step memory there (a fresh first step), still at its time
+    assert state.t == 2.0 and state.stepper is None
+    with pytest.raises(InputError, match=r"^t: the run starts at 1\.5 and state0 is the state at 2\.0"):
+        orbatt.propagate(sc.body, state, sc.potential, sc.times[sc.times >= 1.5], **sc.settings)

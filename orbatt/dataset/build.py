@@ -61,6 +61,7 @@ from ..frame_boundary import body_variables, principal_trajectory
 from ..orbital import lvlh_angles
 from ..orbits.base import OrbitProvider
 from ..potentials import energy_and_torques, evaluate_members
+from ..state import continuation_text
 from ..terms import FIELD_VARIABLES
 from ..units import DIMENSIONLESS_UNITS, INTERNAL_UNITS, LEGACY_OUTPUT, from_kernel
 from ..version import __version__
@@ -498,6 +499,9 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title, **wheels)
     data, coords = body_variables(trajectory.body, data, coords)  # back to the body frame of a tensor
+    cont = continuation_text(trajectory)
+    if cont is not None:  # where a run continued from this file starts (orbatt run --append)
+        attrs["continuation"] = cont
     if not dimless:  # the Dataset boundary: the attitude family from kernel units to SI
         data, coords = si_form(data), si_form(coords)
     return Content(data, coords, attrs)

@@ -4,12 +4,15 @@ replaced (:func:`is_orbatt_result`, :func:`check_replaceable`: the CLI's ``-o``,
 :func:`~orbatt.dataset.netcdf.write_netcdf`, ``ds.orbatt.to_netcdf``), whether a file's header
 declares sizes it cannot hold or the machine cannot load (:func:`check_declared_size`), and
 whether the global attributes orbatt reads are intact (:func:`check_global_attributes`), and
-whether samples appended to a file are of its run (:func:`check_same_run`).
+whether samples appended to a file are of its run (:func:`check_same_run`; a run continued to a
+later ``t_end``, :func:`same_scenario`, is the same run).
 """
 from __future__ import annotations
 
 import json
 import os
+
+import tomllib
 
 import numpy as np
 
@@ -17,7 +20,8 @@ from ..errors import InputError
 
 __all__ = ["check_engine", "is_orbatt_result", "check_replaceable", "check_declared_size", "available_memory",
            "check_global_attributes", "check_same_run", "SAME_RUN_ATTRS", "JSON_ATTRS", "INTEGER_ATTRS",
-           "MAX_COMPRESSION", "MEMORY_SHARE", "short_text"]
+           "MAX_COMPRESSION", "MEMORY_SHARE", "short_text", "MERGED", "CONTINUED_KEYS", "merged_values",
+           "same_scenario", "continued_scenario"]
 
 
 def _default_engine():
@@ -192,7 +196,7 @@ def check_declared_size(name, engine, *, load=False):
 
 #: global attributes written as JSON text: ``{name: type of the value}`` (:func:`check_global_attributes`)
 JSON_ATTRS = {"method_settings": dict, "integration_stats": dict, "potential": dict, "orbit": dict, "wheels": list,
-              "sweep_parameters": dict, "sweep_outputs": list, "sweep_run": dict}
+              "sweep_parameters": dict, "sweep_outputs": list, "sweep_run": dict, "continuation": dict}
 #: global attributes that are whole numbers: ``{name: (low, high)}`` (None: unbounded)
 INTEGER_ATTRS = {"integration_complete": (0, 1), "sweep_cases": (0, None), "sweep_samples": (0, None),
                  "sweep_grid_points": (0, None), "sweep_resampled_cases": (0, None), "sweep_seed": (0, None),
@@ -253,6 +257,57 @@ def short_text(exc, n=120):
 SAME_RUN_ATTRS = ("scenario", "potential", "orbit", "unit_system")
 #: dimensions along which appended samples add entries (their variables are not compared)
 _GROWING = ("time", "eclipse")
+#: dimensions of variables that sum up the samples (``mode_entry_time``: the earliest entry of each
+#: mode): an append merges them (:func:`merged_values`) instead of comparing them
+MERGED = ("mode_index",)
+#: the keys of a scenario that may differ between the runs of one file: the end of the run
+#: (``orbatt run --append`` continues a run to a later ``t_end``)
+CONTINUED_KEYS = (("integration", "t_end"),)
+#: the keys of the ``potential`` and ``orbit`` descriptions that follow the end of the run (the
+#: span the fields are sampled over)
+SPAN_KEYS = ("sampled_span_s",)
+
+
+def _without_spans(d):
+    if isinstance(d, dict):
+        return {k: _without_spans(v) for k, v in d.items() if k not in SPAN_KEYS}
+    if isinstance(d, list):
+        return [_without_spans(v) for v in d]
+    return d
+
+
+def same_description(a, b):
+    """Whether two JSON descriptions (the ``potential``, the ``orbit``) are of one run: equal once
+    the spans a continuation extends (:data:`SPAN_KEYS`) are left out."""
+    if str(a) == str(b):
+        return True
+    try:
+        return _without_spans(json.loads(str(a))) == _without_spans(json.loads(str(b)))
+    except ValueError:
+        return False
+
+
+def merged_values(old, new):
+    """A summary variable (:data:`MERGED`) of a file and of samples appended to it: the earliest
+    time of each entry (``mode_entry_time``: NaN where neither entered it)."""
+    return np.fmin(np.asarray(old, dtype=np.float64), np.asarray(new, dtype=np.float64))
+
+
+def same_scenario(a, b):
+    """Whether the scenario texts ``a`` and ``b`` (TOML) are of one run: equal once the keys a
+    continuation may change (:data:`CONTINUED_KEYS`) are left out (texts that do not parse:
+    equal as texts)."""
+    if str(a) == str(b):
+        return True
+    try:
+        ta, tb = tomllib.loads(str(a)), tomllib.loads(str(b))
+    except (tomllib.TOMLDecodeError, TypeError, ValueError):
+        return False
+    for table, key in CONTINUED_KEYS:
+        for t in (ta, tb):
+            if isinstance(t.get(table), dict):
+                t[table].pop(key, None)
+    return ta == tb
 
 
 def _shown(values, n=6):
@@ -286,7 +341,7 @@ def check_same_run(f, piece, attrs, engine, name):
         if u_file is not None and u_new is not None and str(u_file) != str(u_new):
             raise InputError(f"append: {vname} is in {str(u_file)!r} in {name} and in {str(u_new)!r} in the new "
                              "samples; convert them to the file's units, or write a new file")
-        if any(d in _GROWING for d in var.dims) or kind not in "fiub":
+        if any(d in _GROWING or d in MERGED for d in var.dims) or kind not in "fiub":
             continue
         values = np.asarray(var.values)
         old = np.asarray(fv[...])
@@ -298,6 +353,67 @@ def check_same_run(f, piece, attrs, engine, name):
         lambda k: f.getncattr(k) if k in f.ncattrs() else None)
     for key in SAME_RUN_ATTRS:
         a, b = get(key), attrs.get(key)
+        if a is not None and b is not None and (same_scenario(a, b) if key == "scenario" else
+                                                same_description(a, b) if key in ("potential", "orbit") else False):
+            continue
         if a is not None and b is not None and str(a) != str(b):
             raise InputError(f"append: the new samples are of another run: their global attribute {key!r} differs "
                              f"from that of {name}; append only samples of the same run")
+
+
+def continued_scenario(path, scenario):
+    """``scenario`` set to continue the run in the file ``path`` (``orbatt run --append``): a
+    copy whose ``state0`` is the file's ``continuation`` (:meth:`orbatt.State.from_record`: the
+    state at its last sample, the flight software's state after the tick there, the tick grid
+    and the step loop's memory) and whose ``times`` are that sample's time and the scenario's
+    output times after it. Its run gives the single run's samples after the file's, bit for bit
+    (from a file that ends where the scenario's outputs fall, and tables of fields along the
+    orbit, which are laid out over a run's whole span, aside: docs/flight-software.md).
+
+    Raises
+    ------
+    InputError
+        The file holds no state to continue from, is of another run (its scenario differs other
+        than in ``t_end``), or already reaches the scenario's ``t_end``.
+    """
+    import copy
+
+    from ..state import State
+
+    name = os.fspath(path)
+    try:
+        attrs = _global_attributes(name, check_engine(None))
+    except (OSError, ValueError, KeyError) as exc:
+        raise InputError(f"--append: {name} cannot be read as NetCDF ({short_text(exc)}); give a result of "
+                         "'orbatt run', or leave --append out to write a new file") from None
+    if "orbatt_version" not in attrs:
+        raise InputError(f"--append: {name} was not written by orbatt; give a result of 'orbatt run'")
+    rec, text = attrs.get("continuation"), attrs.get("scenario")
+    if rec is None:
+        raise InputError(f"--append: {name} holds no state to continue from (an ensemble, a sweep, or a file of an "
+                         "earlier orbatt); run the scenario whole into a new file (leave --append out)")
+    if text is None or not same_scenario(text, scenario.text):
+        raise InputError(f"--append: {name} holds a run of another scenario (they differ other than in [integration] "
+                         "t_end); append only to a run of this scenario, or write a new file")
+    state = State.from_record(scenario.body, rec)
+    times = np.asarray(scenario.times, dtype=np.float64)
+    if not times[-1] > state.t:
+        raise InputError(f"--append: {name} already ends at t = {state.t!r} s, and this scenario's t_end is "
+                         f"{float(times[-1])!r} s; give a later [integration] t_end to continue the run")
+    out = copy.copy(scenario)
+    out.state0 = state
+    out.times = np.concatenate([[state.t], times[times > state.t]])
+    return out
+
+
+def _global_attributes(name, engine):
+    """The global attributes of the NetCDF file ``name`` (text as ``str``)."""
+    if engine == "netcdf4":
+        import netCDF4
+
+        with netCDF4.Dataset(name) as f:
+            return {k: f.getncattr(k) for k in f.ncattrs()}
+    import h5netcdf
+
+    with h5netcdf.File(name, "r") as f:
+        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}

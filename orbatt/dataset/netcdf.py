@@ -44,9 +44,9 @@ from .atomic import TEMP_PREFIX, replacing
 from .build import LABEL_COORDS, UNIT_SYSTEM, orbatt_version, utc_now
 from .content import Content, Var
 from .eclipses import TIME_VARIABLES, decode_variables, file_variables
-from .file_checks import (INTEGER_ATTRS, JSON_ATTRS, available_memory, check_declared_size, check_engine,
+from .file_checks import (INTEGER_ATTRS, JSON_ATTRS, MERGED, available_memory, check_declared_size, check_engine,
                           check_global_attributes, check_replaceable, check_same_run, is_orbatt_result,
-                          short_text)
+                          merged_values, short_text)
 from .netcdf_direct import writable, write_content
 from .timeaxis import LEAP_SECONDS, NOMINAL_COMMENT, NOMINAL_EPOCH, cf_time_attrs, elapsed_attrs, elapsed_values
 
@@ -416,6 +416,9 @@ def _append(ds: xr.Dataset, path, engine, name=None):
             idx_file[ax] = slice(n0, n0 + n)
             f.variables[vname][tuple(idx_file)] = np.asarray(var.values)[tuple(idx_new)]
         _append_eclipses(f, piece, engine, name)
+        for vname, var in piece.variables.items():  # summaries of the samples (mode_entry_time): merged
+            if "time" not in var.dims and any(d in MERGED for d in var.dims):
+                f.variables[vname][...] = merged_values(f.variables[vname][...], var.values)
         # global attributes
         get = (lambda k: f.attrs.get(k)) if engine == "h5netcdf" else (
             lambda k: f.getncattr(k) if k in f.ncattrs() else None)
@@ -432,6 +435,19 @@ def _append(ds: xr.Dataset, path, engine, name=None):
         comp = get("integration_complete")
         if comp is not None:
             put("integration_complete", np.int8(int(np.asarray(comp)) and int(ds.attrs.get("integration_complete", 1))))
+        # where a run continued from the file starts: the new last sample's (none if it has none),
+        # and the scenario that runs the whole file (a later t_end)
+        cont = ds.attrs.get("continuation")
+        if cont is not None:
+            put("continuation", cont)
+        elif get("continuation") is not None:
+            if engine == "h5netcdf":
+                del f.attrs["continuation"]
+            else:
+                f.delncattr("continuation")
+        for key in ("scenario", "potential"):  # the run the whole file holds now (a later t_end)
+            if ds.attrs.get(key) is not None:
+                put(key, ds.attrs[key])
         now = utc_now()
         put("date_modified", now)
         hist = get("history") or ""
