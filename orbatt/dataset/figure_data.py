@@ -23,7 +23,7 @@ from ..units import parse_unit, unit_string
 from .plots import stored_scenario, value_in, drift_series, impulse_times, log_values
 from .timeaxis import elapsed_values
 
-__all__ = ["FIGURES", "LVLH_LABELS", "LVLH_DEFINITION", "Pointing", "choose_figures", "control_law",
+__all__ = ["ModeInterval", "mode_intervals", "FIGURES", "LVLH_LABELS", "LVLH_DEFINITION", "Pointing", "choose_figures", "control_law",
            "pointing_error", "eclipse_intervals", "wheel_limits", "reference_rates", "thresholds",
            "rate_to_orbital_frame", "wheel_gyroscopic", "unit_factor", "values_in", "torque_terms", "conserved",
            "log_values", "impulse_times", "libration_angle"]
@@ -178,6 +178,51 @@ def eclipse_intervals(ds, x):
         out.append((x[max(k - 1, 0)] if k else x[k], x[j + 1] if j + 1 < n else x[j], bool(np.any(s[k:j + 1] <= 0.0))))
         k = j + 1
     return out
+
+
+class ModeInterval(NamedTuple):
+    """A stretch of the run in one mode of the flight software's sequence: ``start``, ``end``
+    (the Dataset's ``elapsed`` unit), the mode's flag value ``mode`` and its ``name``."""
+
+    start: float
+    end: float
+    mode: int
+    name: str
+
+
+def mode_intervals(ds):
+    """The run's modes as :class:`ModeInterval` s, in order (empty without a ``mode`` variable;
+    an ensemble: its first member's). Each begins when the mode was entered - its
+    ``mode_entry_time`` (a tick between two outputs), else the first output in it - and ends
+    where the next begins (the last at the last output); names from ``mode``'s CF
+    ``flag_values`` / ``flag_meanings``."""
+    if "mode" not in ds:
+        return []
+    mode = np.asarray(ds["mode"].values)
+    entry = np.asarray(ds["mode_entry_time"].values, dtype=np.float64) if "mode_entry_time" in ds else None
+    while mode.ndim > 1:
+        mode = mode[0]
+        entry = entry[0] if entry is not None and entry.ndim > 1 else entry
+    t = np.asarray(elapsed_values(ds), dtype=np.float64)
+    while t.ndim > 1:
+        t = t[0]
+    names = dict(zip(np.asarray(ds["mode"].attrs.get("flag_values", [])).ravel().tolist(),
+                     str(ds["mode"].attrs.get("flag_meanings", "")).split()))
+    starts = [i for i in range(mode.size) if mode[i] >= 0 and (i == 0 or mode[i] != mode[i - 1])]
+    out = []
+    for n, i in enumerate(starts):
+        m = int(mode[i])
+        begin = float(t[i])
+        e = float(entry[m]) if entry is not None and m < entry.size else np.nan
+        if i > 0 and t[i - 1] < e <= t[i]:
+            begin = e
+        out.append([begin, None, m, names.get(m, f"mode {m}")])
+    for n in range(len(out)):
+        j = starts[n + 1] if n + 1 < len(out) else None
+        out[n][1] = out[n + 1][0] if j is not None else float(t[-1])
+        if j is not None and np.any(mode[starts[n]:j] < 0):  # (no mode: -1) the stretch ends at its last output
+            out[n][1] = float(t[starts[n] + int(np.argmax(mode[starts[n]:j] < 0)) - 1])
+    return [ModeInterval(*x) for x in out]
 
 
 def wheel_limits(ds):

@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure_data import (FIGURES, eclipse_intervals, log_values, pointing_error,
+from .figure_data import (FIGURES, eclipse_intervals, log_values, mode_intervals, pointing_error,
                           rate_to_orbital_frame, reference_rates, thresholds, torque_terms, unit_factor, values_in,
                           wheel_gyroscopic, wheel_limits)
-from .plots import mark_impulses, plot_drift, time_axis
+from .plots import mark_impulses, plot_drift, time_axis, time_values
 
 __all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "LIMIT_SHOWN", "TORQUE_COLORS", "draw",
-           "plot_pointing", "plot_rates", "plot_wheels", "plot_torques", "plot_orbit"]
+           "plot_pointing", "plot_rates", "plot_wheels", "plot_torques", "plot_orbit", "shade_modes", "MODE_SHADES"]
 
 #: an ensemble with more cases than this is drawn as a median and bands instead of a line per case
 ENSEMBLE_LINES = 200
@@ -105,6 +105,27 @@ def _shade_eclipses(axes, ds, x):
     return bool(spans)
 
 
+#: the shades of the modes of a sequence (flag value k: colour k, cycling), light enough for the
+#: curves on them
+MODE_SHADES = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
+
+
+def shade_modes(axes, ds, time="auto"):
+    """Shade each interval of the flight software's modes (:func:`mode_intervals`: from the
+    Dataset's ``mode`` and its CF ``flag_meanings``) on every axis, one colour per mode, the
+    legend naming them (``mode: NAME``); each span's ``gid`` is ``"mode k"``. Returns the
+    intervals shaded."""
+    spans = mode_intervals(ds)
+    for ax in axes:
+        named = set()
+        for iv in spans:
+            a, b = time_values(ds, np.array([iv.start, iv.end]), time)
+            ax.axvspan(a, b, color=MODE_SHADES[iv.mode % len(MODE_SHADES)], alpha=0.10, lw=0, zorder=0,
+                       gid=f"mode {iv.mode}", label=f"mode: {iv.name}" if iv.mode not in named else None)
+            named.add(iv.mode)
+    return spans
+
+
 def legend_outside(ax):
     """The axis' legend to the right of it, where it covers no data (none without labels)."""
     handles, labels = ax.get_legend_handles_labels()
@@ -114,6 +135,7 @@ def legend_outside(ax):
 
 
 def _finish(fig, axes, ds, x, xlabel, title, time="auto"):
+    modes = shade_modes(axes, ds, time)
     shaded = _shade_eclipses(axes, ds, x)
     mark_impulses(axes, ds, time)
     for ax in axes:
@@ -121,7 +143,8 @@ def _finish(fig, axes, ds, x, xlabel, title, time="auto"):
         legend_outside(ax)
     axes[-1].set_xlabel(xlabel)
     name = str(ds.attrs.get("title", "")).removeprefix("orbatt: ")
-    fig.suptitle((f"{name}: {title}" if name else title) + (" (grey: eclipse)" if shaded else ""))
+    fig.suptitle((f"{name}: {title}" if name else title) + (" (grey: eclipse)" if shaded else "")
+                 + (" (shaded: modes)" if modes else ""))
     if np.issubdtype(np.asarray(x).dtype, np.datetime64):
         fig.autofmt_xdate()
     fig.tight_layout()
