@@ -79,7 +79,10 @@ def case_text(scenario, spec, values, k):
     """The TOML text of case ``k``'s scenario (:func:`case_data` written out): ``orbatt run`` of
     it gives the case's results bit for bit."""
     base = tomllib.loads(scenario.text)
-    return toml_text(case_data(base, spec, values, k, scenario.spec.dimensionless))
+    data = case_data(base, spec, values, k, scenario.spec.dimensionless)
+    if "sensors" in data and "sensors.case" not in spec.paths:  # each case draws its own noise
+        data["sensors"] = {**data["sensors"], "case": int(k)}
+    return toml_text(data)
 
 
 def state_only(name):

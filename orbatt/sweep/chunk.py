@@ -9,6 +9,7 @@ Quantities are in internal units (:mod:`orbatt.units`); frames as in ``docs/desi
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import json
@@ -152,21 +153,40 @@ def initial_states(sc, spec, values, axis, inertia, orbit, idx):
     return st.q, st.Q
 
 
-def propagate_group(sc, bodies, q0, Q0, potential):
+def noise_potential(potential, case):
+    """``potential`` whose control law's sensors (:class:`orbatt.Navigation`) draw the noise of
+    sweep case ``case`` (the ``case`` word of the key: :mod:`orbatt.core.noise`), sharing its
+    tables and kernel model (shallow copies); ``potential`` itself without sensors."""
+    law = getattr(potential, "control", None)
+    nav = getattr(law, "navigation", None)
+    if nav is None:
+        return potential
+    nav_k, law_k, pot_k = copy.copy(nav), copy.copy(law), copy.copy(potential)
+    nav_k.case = int(case)
+    law_k.navigation = nav_k
+    pot_k.control = law_k
+    return pot_k
+
+
+def propagate_group(sc, bodies, q0, Q0, potential, cases=None):
     """Ensemble propagation of one group: ``(trajectory or None, q, Q, failed, stats)``,
     ``q, Q`` (m, N, 4); the trajectory's ``wheel_momenta`` (m, N, n) hold the wheels' momenta
     of a gyrostat. A member that fails is rerun alone and left NaN (members are independent,
-    so the others' results do not change)."""
+    so the others' results do not change). ``cases`` (m,): the members' case numbers, which
+    a law with sensors needs (each case draws its own noise, :func:`noise_potential`): each
+    member then runs alone."""
 
     kw = dict(sc.settings)
     m = q0.shape[0]
     failed = np.zeros(m, dtype=bool)
-    try:
-        tr = propagate(bodies if len(bodies) > 1 else bodies[0], State(sc.body, q0, Q0), potential, sc.times,
-                       method=sc.method, **kw)
-        return tr, tr.q, tr.Q, failed, dict(tr.stats)
-    except IntegrationError:
-        pass
+    noisy = cases is not None and getattr(getattr(potential, "control", None), "navigation", None) is not None
+    if not noisy:
+        try:
+            tr = propagate(bodies if len(bodies) > 1 else bodies[0], State(sc.body, q0, Q0), potential, sc.times,
+                           method=sc.method, **kw)
+            return tr, tr.q, tr.Q, failed, dict(tr.stats)
+        except IntegrationError:
+            pass
     N = sc.times.size
     q = np.full((m, N, 4), np.nan)
     Q = np.full((m, N, 4), np.nan)
@@ -175,8 +195,9 @@ def propagate_group(sc, bodies, q0, Q0, potential):
     tr = None
     for e in range(m):
         b = bodies[e] if len(bodies) > 1 else bodies[0]
+        pot = noise_potential(potential, cases[e]) if noisy else potential
         try:
-            t1 = propagate([b], State(sc.body, q0[e:e + 1], Q0[e:e + 1]), potential, sc.times, method=sc.method, **kw)
+            t1 = propagate([b], State(sc.body, q0[e:e + 1], Q0[e:e + 1]), pot, sc.times, method=sc.method, **kw)
         except IntegrationError:
             failed[e] = True
             continue
@@ -310,7 +331,9 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
                                                  else None):
         orbit, potential = group_sc.orbit, group_sc.potential
         inertia[idx] = [b.inertia_value for b in bodies] if len(bodies) == idx.size else inertia[idx]
-        tr, q, Q, bad, st = propagate_group(group_sc, bodies, q0, Q0, potential)
+        # each case draws its own sensor noise (its number: the case word of the noise key)
+        words = None if "sensors.case" in spec.paths else start + idx
+        tr, q, Q, bad, st = propagate_group(group_sc, bodies, q0, Q0, potential, cases=words)
         add_stats(stats, st)
         res["failed"][idx] = bad
         res["q_initial"][idx], res["Q_initial"][idx] = q0, Q0

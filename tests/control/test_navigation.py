@@ -279,3 +279,82 @@ def test_inputs_are_checked_where_they_enter():
         Navigation(-1, gyro=Gyro(10 * u.Hz, ARW))
     with pytest.raises(InputError, match="rate"):
         Gyro(10 * u.m, ARW)
+
+
+def _fine_pointing_text(t_end="60 s", output_step="5 s"):
+    """The shipped slew on wheels with a gyro, a star tracker and the MEKF, shorter."""
+    import re
+
+    from orbatt.shipped import shipped_file
+    text = shipped_file("cubesat-slew-wheels").read_text().replace('period = "0.1 s"\n', '''period = "0.1 s"
+
+[sensors]
+seed = 20261128
+
+[sensors.gyro]
+rate = "10 Hz"
+arw = "0.15 deg/sqrt(h)"
+rrw = "0.3 deg / h(3/2)"
+bias = ["5 deg/h", "-3 deg/h", "2 deg/h"]
+
+[sensors.star_tracker]
+rate = "1 Hz"
+noise = "10 arcsec"
+
+[estimator]
+kind = "mekf"
+attitude_sigma = "0.1 deg"
+bias_sigma = "10 deg/h"
+''', 1)
+    text = re.sub(r't_end = "[^"]*"', f't_end = "{t_end}"', text)
+    return re.sub(r'output_step = "[^"]*"', f'output_step = "{output_step}"', text)
+
+
+def test_a_sweep_case_is_its_single_run_bitwise_in_any_chunk(tmp_path):
+    """Each sweep case draws its own noise (case k: the case word k, written into its scenario):
+    every case equals the single run of its scenario bit for bit, computed whole or in chunks,
+    and two cases' noise differs."""
+    text = _fine_pointing_text() + '''
+[sweep]
+samples = 4
+seed = 3
+outputs = ["trajectory"]
+
+[sweep.parameters]
+"control.kp" = { distribution = "uniform", low = "3e-3 N m", high = "5e-3 N m" }
+'''
+    path = tmp_path / "fp-sweep.toml"
+    path.write_text(text)
+    sw = orbatt.load_sweep(path)
+    whole = sw.compute()
+    parts = [sw.compute(0, 1), sw.compute(1, 4)]
+    for k in range(4):
+        case_file = tmp_path / f"case{k}.toml"
+        case_file.write_text(sw.case_text(k))
+        assert f"case = {k}" in case_file.read_text()
+        one = orbatt.load_scenario(case_file).run()
+        part = parts[0] if k == 0 else parts[1]
+        for ds in (whole.isel(case=k), part.sel(case=k)):
+            for name in ("q", "knowledge_error", "bias_estimate", "gyro_bias", "knowledge_sigma"):
+                np.testing.assert_array_equal(ds[name].values, one[name].values)
+    assert not np.array_equal(whole["gyro_bias"].isel(case=0).values, whole["gyro_bias"].isel(case=1).values)
+
+
+def test_scenario_keys_are_checked_where_they_enter(tmp_path):
+    from orbatt.errors import ScenarioError
+
+    base = _fine_pointing_text()
+    bad = {
+        'rate = "1 Hz"\nnoise': ('rate = "3 Hz"\nnoise', r"\[sensors.star_tracker\] rate"),
+        'kind = "mekf"': ('kind = "ukf"', r"\[estimator\] kind"),
+        'seed = 20261128': ('seed = -4', r"\[sensors\] seed"),
+        'period = "0.1 s"': ('period = "0.25 s"', r"\[control\] period"),
+        '[estimator]': ('[estimator]\nfoo = 1', r"\[estimator\] foo"),
+    }
+    for old, (new, match) in bad.items():
+        p = tmp_path / "bad.toml"
+        p.write_text(base.replace(old, new, 1))
+        with pytest.raises(ScenarioError, match=match):
+            orbatt.load_scenario(p)
+    p.write_text(base.replace('period = "0.1 s"\n', 'period = "0.1 s"\nfeedback = "truth"\n', 1))
+    assert orbatt.load_scenario(p).potential.control.navigation.feedback == "truth"
