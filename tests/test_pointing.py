@@ -291,3 +291,22 @@ def test_a_window_with_too_few_outputs_names_the_sweep_key():
     text = _nadir_hold("60 s") + '[sweep]\noutputs = ["rpe"]\nstability_window = "15 s"\n' + GRID
     with pytest.raises(InputError, match=r"\[sweep\] stability_window.*at least two outputs"):
         Sweep(Scenario(parse(text, "mc.toml")), seed=1).compute()
+
+
+def test_info_prints_the_budget_and_plot_draws_it(tmp_path, capsys):
+    from orbatt.cli import main
+
+    p = tmp_path / "sw.toml"
+    p.write_text(_nadir_hold() + '[sweep]\noutputs = ["ape", "rpe"]\nstability_window = "60 s"\n'
+                 'requirement = { ape = "90 deg" }\n' + GRID)
+    assert main(["sweep", str(p), "-o", str(tmp_path / "sw.nc"), "--scheduler", "synchronous", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "sw.nc")]) == 0
+    out = capsys.readouterr().out
+    budget = out[out.index("pointing budget"):]
+    row = next(line for line in budget.splitlines() if line.split()[:1] == ["ape"])
+    assert row.endswith("90  2 of 2")  # the requirement, and both cases meet it
+    assert "ensemble value" in budget and "not computed" in budget
+    assert main(["plot", str(tmp_path / "sw.nc"), "-o", str(tmp_path / "figs")]) == 0
+    assert sorted(f.name for f in (tmp_path / "figs").iterdir()) == ["sw-budget.png", "sw-distributions.png",
+                                                                      "sw-scatter.png"]
