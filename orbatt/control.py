@@ -5,8 +5,9 @@
   a gyrostat: the state becomes ``(q, Q, h)`` with ``h`` the rotors' axial momenta, and
   ``g = 1/2 Im(q~ Q)`` is the **total** angular momentum. The body's ``inertia`` is that of
   the whole spacecraft with the rotors locked.
-* :class:`PDControl`: quaternion feedback towards the orbital frame, an inertial attitude or
-  the Sun, made by an ideal actuator or by the wheels.
+* :class:`PDControl`: quaternion feedback towards the orbital frame, an inertial attitude,
+  the Sun, a ground target or the geodetic nadir, made by an ideal actuator, the wheels or
+  magnetorquers.
 * :class:`BDotControl`: B-dot detumbling with magnetorquers.
 
 A control law is a peer of the potential: ``orbatt.propagate(..., control=law)`` (or carried
@@ -35,10 +36,12 @@ AXIS_TOLERANCE = 1e-6
 MAX_WHEELS = 16
 #: PD targets and actuators by name
 TARGETS = {"orbital": kc.TARGET_ORBITAL, "inertial": kc.TARGET_INERTIAL, "sun": kc.TARGET_SUN,
-           "ground": kc.TARGET_GROUND}
+           "ground": kc.TARGET_GROUND, "nadir": kc.TARGET_NADIR}
 #: the targets a body axis points at (``target_axis``), along the line of sight
 POINTING_TARGETS = ("sun", "ground")
-ACTUATORS = ("ideal", "wheels")
+#: the frames a PD law holds the body axes on, turned by the optional offset ``target_q``
+FRAME_TARGETS = ("orbital", "nadir")
+ACTUATORS = ("ideal", "wheels", "magnetorquers")
 
 
 def scalar_value(x, unit, name, *, positive=False, nonnegative=False, allow_none=False):
@@ -219,23 +222,36 @@ class PDControl:
 
     Parameters
     ----------
-    target : {"orbital", "inertial", "sun"}
+    target : {"orbital", "inertial", "sun", "ground", "nadir"}
         Hold the body axes on the orbital frame O (``q_orbital`` -> identity, or -> ``target_q``
-        when given), on the attitude ``target_q`` (inertial, scalar first), or point the body
-        axis ``target_axis`` at the Sun (needs the orbit's epoch).
+        when given), on the attitude ``target_q`` (inertial, scalar first), point the body
+        axis ``target_axis`` at the Sun or at a ground target (both need the orbit's epoch), or
+        hold the body axes on the geodetic nadir frame N (``"nadir"``: O with the geocentric
+        radial ``o1`` replaced by the WGS84 ellipsoid's normal through the spacecraft, so that
+        ``-n1`` points at the point of the ellipsoid below it; ``n3`` along ``n1 x v``, ``n2 =
+        n3 x n1`` the velocity's projection; turned by ``target_q`` when given, as O is; needs
+        the orbit's epoch: the Earth's rotation, ITRS -> GCRS through ERFA).
     kp : Quantity (N m)
         Torque per unit quaternion error.
     kd : Quantity (N m s)
         Torque per unit rate error (rad/s).
     max_torque : Quantity (N m), optional
         Per-axis saturation of the commanded torque.
-    actuator : {"ideal", "wheels"}
-        An ideal external torque, or the body's reaction wheels (their axes must span three
-        dimensions; their limits apply).
+    actuator : {"ideal", "wheels", "magnetorquers"}
+        An ideal external torque, the body's reaction wheels (their axes must span three
+        dimensions; their limits apply), or magnetorquers: the dipole ``m = (B x tau) / |B|^2``
+        (body axes), each axis clipped to ``max_dipole``, so that the external torque ``m x B``
+        is the commanded torque's part normal to the field (its part along ``B`` cannot be made:
+        an underactuated law); reads the potential's magnetic field along the orbit. With a
+        ``period`` the dipole is computed at the ticks and held (``m x B(t)`` follows the
+        field). The dipole is the Dataset's ``dipole_control``.
+    max_dipole : Quantity (A m^2), optional
+        The magnetorquers' per-axis limit (required with ``actuator = "magnetorquers"``).
     target_q : 4 floats, optional
         The target attitude, scalar first: target -> inertial S (``target = "inertial"``,
         required), or target -> orbital O (``target = "orbital"``, optional: a constant offset
-        from the orbital frame such as a roll, default identity).
+        from the orbital frame such as a roll, default identity), or target -> N (``target =
+        "nadir"``, the same offset from the geodetic nadir frame).
     target_location : 3 values, optional
         ``target = "ground"``: the point on the rotating Earth to track, geodetic WGS84 latitude,
         longitude (angles; plain numbers are rad) and height (length; plain: m). The law points
@@ -273,11 +289,11 @@ class PDControl:
 
     def __init__(self, target="orbital", *, kp, kd, max_torque=None, actuator="ideal", target_q=None,
                  target_axis=None, max_rate=None, ki=None, period=None, dump_gain=None, dump_max_dipole=None,
-                 target_location=None):
+                 target_location=None, max_dipole=None):
         if target not in TARGETS:
             raise InputError(f"target: {target!r} is not one of {', '.join(map(repr, TARGETS))}")
         if actuator not in ACTUATORS:
-            raise InputError(f"actuator: {actuator!r} is not one of 'ideal', 'wheels'")
+            raise InputError(f"actuator: {actuator!r} is not one of {', '.join(map(repr, ACTUATORS))}")
         self.target, self.actuator = target, actuator
         self.kp = scalar_value(kp, u.N * u.m, "kp", nonnegative=True)
         self.kd = scalar_value(kd, u.N * u.m * u.s, "kd", nonnegative=True)
@@ -288,12 +304,19 @@ class PDControl:
             raise InputError("max_rate: the rate-limited slew needs kd > 0 (the rate loop's gain)")
         self.ki = scalar_value(ki, u.N * u.m / u.s, "ki", nonnegative=True, allow_none=True)
         self.dump_gain, self.dump_max_dipole = _dumping(actuator, dump_gain, dump_max_dipole)
+        self.max_dipole = scalar_value(max_dipole, u.A * u.m**2, "max_dipole", positive=True, allow_none=True)
+        if actuator == "magnetorquers" and self.max_dipole is None:
+            raise InputError("max_dipole: actuator = 'magnetorquers' needs the magnetorquers' per-axis limit, e.g. "
+                             "max_dipole = '0.2 A m2'")
+        if actuator != "magnetorquers" and self.max_dipole is not None:
+            raise InputError(f"max_dipole: only read with actuator = 'magnetorquers' (actuator is {actuator!r}); "
+                             "remove it")
         self.target_q = self.target_axis = None
         if target == "inertial" and target_q is None:
             raise InputError("target_q: target = 'inertial' needs the target attitude target_q = [w, x, y, z]")
         if target_q is not None:
             if target in POINTING_TARGETS:
-                raise InputError(f"target_q: only for target = 'inertial' or 'orbital' (target is {target!r}; "
+                raise InputError(f"target_q: only for target = 'inertial', 'orbital' or 'nadir' (target is {target!r}; "
                                  "give target_axis)")
             tq = np.asarray(target_q, dtype=np.float64)
             if tq.shape != (4,) or not np.all(np.isfinite(tq)) or abs(np.linalg.norm(tq) - 1) > AXIS_TOLERANCE:
@@ -313,7 +336,8 @@ class PDControl:
 
     def row(self, wheels, sun_table=None):
         """The :data:`~orbatt.core.model.PD_CONTROL` row for a body with ``wheels`` (internal
-        units); ``sun_table``: the Sun's position along the orbit (``target = sun``)."""
+        units); ``sun_table``: its target's table along the orbit (the Sun's position for
+        ``target = sun``, the ground point's for ``ground``, the geodetic vertical for ``nadir``)."""
         tmax = np.inf if self.max_torque is None else U.to_kernel(self.max_torque, "torque")
         values = (self.target_axis if self.target in POINTING_TARGETS else
                   self.target_q if self.target_q is not None else (1.0, 0.0, 0.0, 0.0))
@@ -323,7 +347,7 @@ class PDControl:
                               U.to_kernel(self.kd, "torque_time"), tmax, values, axes,
                               max_rate=np.inf if self.max_rate is None else self.max_rate,
                               ki=0.0 if self.ki is None else U.to_kernel(self.ki, "torque"),
-                              **command_slots(self.period, wheels))
+                              magnetorquers=self.actuator == "magnetorquers", **command_slots(self.period, wheels))
         return (km.PD_CONTROL, params, sun_table)
 
     def check_wheels(self, wheels):
@@ -346,20 +370,22 @@ class PDControl:
                 "target_axis": None if self.target_axis is None else self.target_axis.tolist(),
                 "target_location": None if self.target_location is None else list(self.target_location),
                 "max_rate": self.max_rate, "ki": self.ki, "period": self.period, "dump_gain": self.dump_gain,
-                "dump_max_dipole": self.dump_max_dipole}
+                "dump_max_dipole": self.dump_max_dipole, "max_dipole": self.max_dipole}
 
     @property
     def reads_orbit(self):
         """Whether the law reads the orbit: the orbital frame or the Sun as its target, or the
-        magnetic field along it (momentum dumping)."""
-        return self.target != "inertial" or self.dump_gain is not None
+        magnetic field along it (momentum dumping, magnetorquers)."""
+        return self.target != "inertial" or self.dump_gain is not None or self.actuator == "magnetorquers"
 
     def model_row(self, wheels, tables):
         """The law's model row (:meth:`row`) for a body with ``wheels``; ``tables(name)``
         gives the fields along the orbit (:meth:`orbatt.EnvironmentTorques.field_table`): the
-        Sun's position (``"sun"``) for ``target = "sun"``."""
+        Sun's position (``"sun"``) for ``target = "sun"``, a ground point's (``("ground", lat,
+        lon, h)``), the geodetic vertical (``"nadir"``)."""
         sun = (tables("sun") if self.target == "sun" else
-               tables(("ground", *self.target_location)) if self.target == "ground" else None)
+               tables(("ground", *self.target_location)) if self.target == "ground" else
+               tables("nadir") if self.target == "nadir" else None)
         # made once per set of wheels, settings and Sun table (~60 us): the settings are in the
         # key, so that a law changed after a run (law.kp = ...) is not run with its old row
         key = (tuple(wheels), repr(sorted(self.settings().items())))
@@ -373,8 +399,14 @@ class PDControl:
         """The law's model rows: its :meth:`model_row`, then with ``dump_gain`` the
         :data:`~orbatt.core.model.MOMENTUM_DUMP` row of its magnetorquers, which reads the
         magnetic field along the orbit (``tables("field")``) and holds its dipole (with a
-        ``period``) after the PD law's state."""
+        ``period``) after the PD law's state; with ``actuator = "magnetorquers"`` the
+        :data:`~orbatt.core.model.MAGNETORQUERS` row right after the PD row, which holds the
+        field along the orbit (the PD row's own table slot is its target's) and the dipole limit
+        (the PD row holds the dipole with a ``period``)."""
         rows = [self.model_row(wheels, tables)]
+        if self.actuator == "magnetorquers":
+            rows.append((km.MAGNETORQUERS, kc.magnetorquer_params(U.to_kernel(self.max_dipole, "dipole")),
+                         tables("field")))
         if self.dump_gain is not None:
             pd = rows[0][1]
             slots = dict(command_slots(self.period, wheels), z0=pd[kc.CTL_Z0] + pd[kc.CTL_NZ])
@@ -394,6 +426,8 @@ class PDControl:
         if self.dump_gain is not None:
             d["dump_gain_per_s"] = self.dump_gain
             d["dump_max_dipole_A_m2"] = self.dump_max_dipole
+        if self.max_dipole is not None:
+            d["max_dipole_A_m2"] = self.max_dipole
         if self.target_q is not None:
             d["target_q"] = self.target_q.tolist()
         if self.target_axis is not None:

@@ -164,10 +164,15 @@ def _dumps(s):
     return s.get("dump_gain") is not None
 
 
+def _magnetorquers(s):
+    """Whether PD settings make the torque with magnetorquers."""
+    return s.get("actuator") == "magnetorquers"
+
+
 def _pd_fields(s):
     target = s.get("target")
-    return (("sun",) if target == "sun" else ("ground",) if target == "ground" else ()) + \
-        (("field",) if _dumps(s) else ())
+    return ((target,) if target in ("sun", "ground", "nadir") else ()) + \
+        (("field",) if _dumps(s) or _magnetorquers(s) else ())
 
 
 def _pd_scales(s, inertia, b):
@@ -194,11 +199,16 @@ COMMON_KEYS = (LawKey("period", "time", "none (continuous)",
 PD = Law(
     "pd", "the PD law", "quaternion PD feedback", PDControl,
     (LawKey("target", " | ".join(map(repr, TARGETS)), "'orbital'",
-            "hold the orbital frame (q_orbital -> 1), the attitude target_q, or point target_axis at the Sun (needs an "
-            "epoch: [orbit] epoch or a TLE's)", "choice", choices=tuple(TARGETS), fallback="orbital"),
+            "hold the orbital frame (q_orbital -> 1), the attitude target_q, point target_axis at the Sun or at a "
+            "ground target, or hold the geodetic nadir frame N (nadir: the orbital frame with its radial o1 replaced by "
+            "the WGS84 ellipsoid's normal through the spacecraft, -n1 toward the point of the ellipsoid below it, n3 "
+            "along n1 x v, n2 = n3 x n1); sun, ground and nadir need an epoch: [orbit] epoch or a TLE's",
+            "choice", choices=tuple(TARGETS), fallback="orbital"),
      LawKey("actuator", " | ".join(map(repr, ACTUATORS)), "'ideal'",
-            "an ideal external torque, or the [[body.wheels]] (their axes must span 3 dimensions; their limits apply)",
-            "choice", choices=ACTUATORS, fallback="ideal"),
+            "an ideal external torque, the [[body.wheels]] (their axes must span 3 dimensions; their limits apply), "
+            "or magnetorquers: the dipole m = (B x tau) / |B|^2 (body axes) clipped per axis to max_dipole makes the "
+            "command's part normal to B (m x B, external; held between ticks with a period); reads [environment] "
+            "magnetic_field", "choice", choices=ACTUATORS, fallback="ideal"),
      LawKey("kp", "torque (N m)", "required", "torque per unit quaternion error", unit="N m", range=(0.0, 1e6),
             sign="nonnegative", required=True),
      LawKey("kd", "torque x time (N m s)", "required", "torque per unit rate error (rad/s)", unit="N m s",
@@ -206,8 +216,8 @@ PD = Law(
      LawKey("max_torque", "torque (N m)", "none", "per-axis saturation of the commanded torque", unit="N m",
             range=(1e-12, 1e4), sign="positive"),
      LawKey("target_q", "plain, 4 values", "required for inertial",
-            "target attitude [w, x, y, z], body -> inertial; with target = 'orbital' (optional) the held attitude "
-            "relative to the orbital frame", "vector", size=4),
+            "target attitude [w, x, y, z], body -> inertial; with target = 'orbital' or 'nadir' (optional) the held "
+            "attitude relative to that frame", "vector", size=4),
      LawKey("target_axis", "plain, 3 values", "required for sun, ground",
             "unit body axis to point at the Sun or the ground target", "vector", size=3),
      LawKey("target_location", "latitude, longitude (angles), height (length)", "required for ground",
@@ -227,11 +237,16 @@ PD = Law(
             unit="1 / s", range=(1e-9, 10.0), sign="positive"),
      LawKey("dump_max_dipole", "magnetic moment (A m2)", "required with dump_gain",
             "per-axis limit of the dumping magnetorquers' dipole", unit="A m2", range=(1e-9, 1e5),
-            sign="positive")) + COMMON_KEYS,
+            sign="positive"),
+     LawKey("max_dipole", "magnetic moment (A m2)", "required for bdot, and for pd with actuator = 'magnetorquers'",
+            "per-axis limit of the magnetorquers' dipole (B-dot's; the PD law's with actuator = 'magnetorquers')",
+            unit="A m2", range=(1e-9, 1e5), sign="positive")) + COMMON_KEYS,
     variables=(LawVar("dipole_control", "dipole", "dipole", "A m^2",
-                      "momentum-dumping magnetic dipole (body components)", when=_dumps),),
+                      "momentum-dumping magnetic dipole (body components)", when=_dumps),
+               LawVar("dipole_control", "dipole", "dipole", "A m^2",
+                      "magnetorquers' dipole making the PD law's torque (body components)", when=_magnetorquers)),
     fields=_pd_fields, holds_frame=lambda s: s.get("target") in ("orbital", "inertial"), time_scales=_pd_scales,
-    reads_orbit=lambda s: s.get("target") != "inertial" or _dumps(s))
+    reads_orbit=lambda s: s.get("target") != "inertial" or _dumps(s) or _magnetorquers(s))
 
 BDOT = Law(
     "bdot", "B-dot", "B-dot detumbling with magnetorquers", BDotControl,

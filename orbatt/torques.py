@@ -28,7 +28,7 @@ from .core.environment import PIECE_HEADER
 from .core.kinds import BY_NAME
 from .environment import sun as esun
 from .environment.atmosphere import NRLMSIS, PiecewiseExponentialAtmosphere
-from .environment.frames import ground_point_gcrs
+from .environment.frames import geodetic_up_gcrs, ground_point_gcrs
 from .environment.tables import (DENSITY_PIECES, LAYERED_DENSITY_PIECES, MAGNETIC_FIELD_PIECES, SUN_PIECES,
                                   TABLE_MARGIN, tabulate_along_orbit)
 from .control import BDotControl, PDControl
@@ -95,6 +95,15 @@ def _vector_argument(spec, value):
     if np.shape(v) != (3,) or not np.all(np.isfinite(v)):
         raise InputError(f"{spec.argument}: expected 3 finite values in {spec.unit}, got {value!r}")
     return np.asarray(v, dtype=np.float64)
+
+
+def _check_pd_fields(law, epoch, magnetic_field):
+    """Refuse a PD law whose target or actuator reads what the environment cannot give: the
+    geodetic nadir needs the epoch (the Earth's rotation), magnetorquers a field model."""
+    if law.target == "nadir" and epoch is None:
+        raise InputError("epoch: a PD law holding the geodetic nadir needs the orbit's epoch (the Earth's rotation)")
+    if law.actuator == "magnetorquers" and magnetic_field is None:
+        raise InputError("magnetic_field: a PD law on magnetorquers needs a field model (igrf or dipole)")
 
 
 class Facet:
@@ -282,12 +291,16 @@ class EnvironmentTorques(Potential):
                     raise InputError("magnetic_field: a B-dot mode needs a field model (igrf or dipole)")
                 if isinstance(law, PDControl) and law.target == "sun" and epoch is None:
                     raise InputError("epoch: a mode pointing at the Sun needs the orbit's epoch (the Sun's position)")
+                if isinstance(law, PDControl):
+                    _check_pd_fields(law, epoch, magnetic_field)
         if isinstance(control, BDotControl) and magnetic_field is None:
             raise InputError("magnetic_field: B-dot control needs a field model (igrf or dipole)")
         if getattr(control, "dump_gain", None) is not None and magnetic_field is None:
             raise InputError("magnetic_field: momentum dumping (dump_gain) needs a field model (igrf or dipole)")
         if isinstance(control, PDControl) and control.target == "sun" and epoch is None:
             raise InputError("epoch: a PD law pointing at the Sun needs the orbit's epoch (the Sun's position)")
+        if isinstance(control, PDControl):
+            _check_pd_fields(control, epoch, magnetic_field)
         self.control = control
         valid = None if orbit is None else orbit.time_span
         if valid is not None and (t0 < valid[0] or t1 > valid[1]):
@@ -349,6 +362,10 @@ class EnvironmentTorques(Potential):
                 tab = self._tabulate(SUN_PIECES, lambda t, r: esun.sun_position(t))
             elif name == "field":
                 tab = self._tabulate(MAGNETIC_FIELD_PIECES, self.magnetic_field.field)
+            elif name == "nadir":  # a PD law's geodetic nadir: the ellipsoid's normal through the spacecraft
+                if self.orbit.epoch is None:
+                    raise InputError("epoch: the geodetic nadir needs the orbit's epoch (the Earth's rotation)")
+                tab = self._tabulate(MAGNETIC_FIELD_PIECES, geodetic_up_gcrs)
             elif isinstance(name, tuple) and name[0] == "ground":  # a PD law's ground target
                 lat, lon, h = name[1:]
                 if self.orbit.epoch is None:

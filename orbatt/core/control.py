@@ -49,9 +49,9 @@ from .qalg import cross, qconj, qmul, rotate_inv
 from .slots import Slots
 
 #: PD targets
-TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN, TARGET_GROUND = 0, 1, 2, 3
+TARGET_ORBITAL, TARGET_INERTIAL, TARGET_SUN, TARGET_GROUND, TARGET_NADIR = 0, 1, 2, 3, 4
 #: actuators of the PD law
-ACTUATOR_IDEAL, ACTUATOR_WHEELS = 0, 1
+ACTUATOR_IDEAL, ACTUATOR_WHEELS, ACTUATOR_MAGNETORQUERS = 0, 1, 2
 #: the slots every control law's row starts with (the flight software, issue 32): its
 #: ``period`` (s; 0: a continuous law), the origin ``phase`` of its tick grid (``t_k = phase +
 #: k period``), where its held command lies in the state (``z0``: ``y[z0:z0 + nz]``, after the
@@ -127,7 +127,7 @@ def law_slots(nz, mode=-1):
 
 
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None, period=0.0,
-              phase=0.0, z0=8, max_rate=np.inf, ki=0.0):
+              phase=0.0, z0=8, max_rate=np.inf, ki=0.0, magnetorquers=False):
     """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
     :data:`TARGET_ORBITAL`, :data:`TARGET_INERTIAL`, :data:`TARGET_SUN`; ``target_values``:
     the target quaternion (relative to the orbital frame for ``TARGET_ORBITAL``; default
@@ -136,10 +136,14 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     ``period, phase, z0``: :func:`flight_software` (the held command: the torque, 3, or the
     wheels' motor torques, n); ``max_rate``: the rate limit of the eigenaxis slew (``inf``:
     none; needs ``kd > 0``); ``ki``: the integral gain (0: none), whose integral of the
-    error (3) follows the held command in the state (``zi``)."""
+    error (3) follows the held command in the state (``zi``); ``magnetorquers``: the torque is
+    made by magnetorquers (:data:`ACTUATOR_MAGNETORQUERS`; the row is followed by its
+    :data:`MAGNETORQUER` row, :func:`magnetorquer_params`; the held command is the dipole, 3)."""
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
+    if magnetorquers and wheel_axes is not None:
+        raise ValueError("one actuator: wheels or magnetorquers")
     if target not in (TARGET_SUN, TARGET_GROUND) and not abs(np.linalg.norm(c) - 1.0) < 1e-9:
         raise ValueError(f"the target quaternion {c.tolist()} is not a unit quaternion")
     fs = flight_software(period, phase, z0)
@@ -150,7 +154,8 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     ncmd = (3 if wheel_axes is None else np.asarray(wheel_axes).reshape(-1, 3).shape[0]) if fs["period"] > 0 else 0
     nint = 3 if ki > 0.0 else 0
     head = dict(target=float(target), kp=kp, kd=kd, max_torque=max_torque,
-                actuator=ACTUATOR_IDEAL if wheel_axes is None else ACTUATOR_WHEELS, c=c,
+                actuator=(ACTUATOR_MAGNETORQUERS if magnetorquers else ACTUATOR_IDEAL if wheel_axes is None else
+                          ACTUATOR_WHEELS), c=c,
                 max_rate=float(max_rate), ki=float(ki), **law_slots(ncmd + nint),
                 zi=fs["z0"] + ncmd if nint else -1.0, **fs)
     if wheel_axes is None:
@@ -216,6 +221,34 @@ def orbital_target(r, xhat, v):
 
 
 @jit_inline
+def nadir_target(r, xhat, v, up, up_rate):
+    """``(p, omega_s)``: the geodetic nadir frame N (N -> S) and its rate (inertial) at the
+    position ``r xhat``, velocity ``v``, for the geodetic vertical ``up`` (the WGS84 ellipsoid's
+    outward normal through the spacecraft, inertial; normalized here) and its rate ``up_rate``.
+
+    N is the orbital frame with the geocentric radial replaced by the geodetic vertical:
+    ``n1 = up`` (so ``-n1`` points at the geodetic nadir), ``n3 = (n1 x v) / |n1 x v|`` (the
+    orbit normal tilted with ``n1``), ``n2 = n3 x n1`` (the velocity's projection normal to
+    ``n1``). Where ``up`` is radial, N is O. Its rate: the part normal to ``n1`` exactly,
+    ``n1 x dn1/dt``, from the table's rate of ``up``; the part about ``n1`` is the orbital
+    frame's ``(r x v) / r^2`` projected on ``n1`` (N turns about ``n1`` as O does to first order;
+    the remainder ~ flattening x orbit rate x its rate of change, below 1e-8 rad/s in LEO)."""
+    un = math.sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2])
+    n1 = (up[0] / un, up[1] / un, up[2] / un)
+    c3 = cross(n1, v)
+    cn = math.sqrt(c3[0] * c3[0] + c3[1] * c3[1] + c3[2] * c3[2])
+    n3 = (c3[0] / cn, c3[1] / cn, c3[2] / cn)
+    n2 = cross(n3, n1)
+    d = cross(n1, up_rate)
+    hx = r * (xhat[1] * v[2] - xhat[2] * v[1])
+    hy = r * (xhat[2] * v[0] - xhat[0] * v[2])
+    hz = r * (xhat[0] * v[1] - xhat[1] * v[0])
+    r2 = r * r
+    a = (hx * n1[0] + hy * n1[1] + hz * n1[2]) / r2
+    return frame_quaternion(n1, n2, n3), (d[0] / un + a * n1[0], d[1] / un + a * n1[1], d[2] / un + a * n1[2])
+
+
+@jit_inline
 def pointing_error(s_b, b):
     """The shortest rotation taking the unit vector ``s_b`` onto ``b`` (both body axes), as a
     unit quaternion; about any axis normal to ``b`` when they are opposite."""
@@ -238,7 +271,9 @@ def pd_error(q, params, p0, r, xhat, v, aux, aux_rate):
     ``aux`` (inertial, km) the Sun's position or a ground target's, ``aux_rate`` (km/s) the
     ground target's velocity: the body axis ``c`` is pointed along the line of sight ``d = aux -
     r xhat``, and for a ground target ``omega_t`` is the line of sight's rate ``d x d' / |d|^2``
-    (the feed-forward; the Sun's apparent rate, ~2e-7 rad/s, is left out)."""
+    (the feed-forward; the Sun's apparent rate, ~2e-7 rad/s, is left out). For the geodetic
+    nadir ``aux`` is the geodetic vertical (a unit vector, inertial) and ``aux_rate`` its rate
+    (:func:`nadir_target`)."""
     target = params[p0 + _PD_TARGET]
     c = p0 + _PD_C
     wt = (0.0, 0.0, 0.0)
@@ -262,6 +297,10 @@ def pd_error(q, params, p0, r, xhat, v, aux, aux_rate):
     else:
         if target == TARGET_ORBITAL:  # the frame O turned by the constant offset c (O -> target)
             p, wt_s = orbital_target(r, xhat, v)
+            qt = qmul(p, (params[c], params[c + 1], params[c + 2], params[c + 3]))
+            wt = rotate_inv(q, wt_s)
+        elif target == TARGET_NADIR:  # the geodetic nadir frame N turned by the offset c (N -> target)
+            p, wt_s = nadir_target(r, xhat, v, aux, aux_rate)
             qt = qmul(p, (params[c], params[c + 1], params[c + 2], params[c + 3]))
             wt = rotate_inv(q, wt_s)
         else:
@@ -444,3 +483,40 @@ def dump_dipole(h, b, params, p0):
     mmax = params[p0 + _DU_MMAX]
     c = cross(h, b)
     return (clip(f * c[0], mmax), clip(f * c[1], mmax), clip(f * c[2], mmax))
+
+
+# ---------------------------------------------------------------------------------------
+# Magnetorquers as the PD law's actuator (issue 32 item 5)
+
+#: the layout of a :data:`~orbatt.core.model.MAGNETORQUERS` row, the companion that follows a PD
+#: law's row with ``actuator = magnetorquers`` and holds what the PD row's own table slot
+#: cannot (that slot is its target's: the Sun, a ground point, the geodetic vertical): the
+#: magnetic field along the orbit (its table) and the magnetorquers' per-axis limit. It
+#: carries the flight-software slots (a mode sequence marks and shifts every row of a law)
+#: with no state of its own (``nz = 0``): the PD row holds the dipole.
+MAGNETORQUER = Slots(*FLIGHT_SOFTWARE, ("max_dipole", 1))
+assert (MAGNETORQUER.period, MAGNETORQUER.phase, MAGNETORQUER.z0, MAGNETORQUER.nz, MAGNETORQUER.mode) == (
+    CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ, CTL_MODE)
+#: the slot of the magnetorquers' limit (``params[p0 + MTQ_MAX_DIPOLE]`` of the companion row)
+MTQ_MAX_DIPOLE = MAGNETORQUER.max_dipole
+
+
+def magnetorquer_params(max_dipole):
+    """The parameters of a :data:`~orbatt.core.model.MAGNETORQUERS` row (:data:`MAGNETORQUER`):
+    the per-axis dipole limit (internal units, 1e-6 A m^2); no state, no period of its own."""
+    if not max_dipole > 0.0:
+        raise ValueError(f"max_dipole: {max_dipole!r} must be positive")
+    return MAGNETORQUER.pack(max_dipole=float(max_dipole), **law_slots(0), **flight_software())
+
+
+@jit_inline
+def torque_dipole(tau, b, mmax):
+    """The dipole that makes the commanded torque ``tau`` in the field ``b`` (both body axes):
+    ``m = (B x tau) / |B|^2``, each axis clipped to ``mmax``. Unclipped, ``m x B = tau_perp``,
+    the part of ``tau`` normal to ``B`` (magnetorquers cannot make the part along ``B``), and
+    ``m . B = 0``. Zero in a zero field."""
+    b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2]
+    if not b2 > 0.0:
+        return (0.0, 0.0, 0.0)
+    c = cross(b, tau)
+    return (clip(c[0] / b2, mmax), clip(c[1] / b2, mmax), clip(c[2] / b2, mmax))

@@ -28,6 +28,7 @@ from ..errors import InputError
 
 __all__ = ["offline_iers", "load_earth_orientation", "earth_orientation_cache", "as_time_array", "as_vectors",
            "rotation_gcrs_to_itrs", "rotation_gcrs_to_itrs_astropy", "celestial_to_intermediate", "gcrs_to_itrs", "itrs_to_gcrs", "geodetic",
+           "ground_point_gcrs", "geodetic_up_gcrs",
            "EARTH_ROTATION_RATE", "R_EARTH_WGS84", "DatesWarning", "one_dates_warning"]
 
 #: Earth's equatorial radius (km), WGS84 ``a``: the sphere below the exponential atmospheres
@@ -354,6 +355,33 @@ def ground_point_gcrs(t, latitude, longitude, height):
     t = as_time_array(t)
     x = erfa.gd2gc(1, float(longitude), float(latitude), float(height)) / 1000.0  # WGS84 = 1; m -> km
     return itrs_to_gcrs(t, np.broadcast_to(x, (t.shape[0], 3)))
+
+
+def geodetic_up_gcrs(t, r_gcrs_km):
+    """The geodetic vertical at geocentric GCRS positions: the unit outward normal of the WGS84
+    ellipsoid through each point, in GCRS components (``(N, 3)``, plain numbers). Minus it
+    points from the point at the geodetic nadir (the point of the ellipsoid below it, where
+    the normal meets the surface). ERFA's ``gc2gde`` gives the geodetic latitude ``phi`` and
+    longitude ``lambda`` of the ITRS position; the normal is ``(cos phi cos lambda, cos phi sin
+    lambda, sin phi)`` in ITRS, rotated back to GCRS by the same matrix (:func:`rotation_gcrs_to_itrs`).
+
+    Parameters
+    ----------
+    t : astropy.time.Time
+        Instants, shape ``(N,)`` (or scalar).
+    r_gcrs_km : array_like (N, 3)
+        Positions in GCRS, km (above the Earth's centre: not at it).
+    """
+    import erfa
+
+    r = as_vectors(r_gcrs_km, "r_gcrs_km", u.km)
+    t = as_time_array(t, r.shape[0])
+    rot = rotation_gcrs_to_itrs(t)
+    x = np.einsum("nij,nj->ni", rot, r)
+    lon, lat, _ = erfa.gc2gde(WGS84_A_M, WGS84_F, x * 1000.0)
+    cl = np.cos(lat)
+    n_itrs = np.stack([cl * np.cos(lon), cl * np.sin(lon), np.sin(lat)], axis=-1)
+    return np.einsum("nji,nj->ni", rot, n_itrs)
 
 
 def geodetic(t, r_gcrs_km):

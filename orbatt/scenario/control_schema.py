@@ -155,6 +155,9 @@ def _law_fields(ctx, law, settings, data, orbit):
     fields = law.fields(settings)
     if "sun" in fields and orbit.get("epoch") is None:
         raise ctx.error("[orbit] epoch", "missing; target = 'sun' needs the date to place the Sun (give [orbit] epoch)")
+    if "nadir" in fields and orbit.get("epoch") is None:
+        raise ctx.error("[orbit] epoch", "missing; target = 'nadir' needs the date to turn the Earth (the geodetic "
+                                         "vertical; give [orbit] epoch)")
     if "ground" in fields and orbit.get("epoch") is None:
         raise ctx.error("[orbit] epoch", "missing; target = 'ground' needs the date to turn the Earth (give [orbit] "
                                          "epoch)")

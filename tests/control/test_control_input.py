@@ -33,7 +33,7 @@ def raises(name, fn, *args, **kwargs):
     ("max_torque", dict(max_torque="0 N m", **PD)),
     ("kp", dict(kp="5e-4 N", kd="1e-2 N m s")),                 # wrong dimension
     ("kd", dict(kp="5e-4 N m", kd=0.01)),                        # no unit
-    ("target", dict(target="nadir", **PD)),
+    ("target", dict(target="moon", **PD)),
     ("actuator", dict(actuator="thrusters", **PD)),
     ("target_q", dict(target="inertial", **PD)),                # inertial without target_q
     ("target_q", dict(target="inertial", target_q=[1.0, 0.1, 0.0, 0.0], **PD)),   # not unit
