@@ -78,7 +78,8 @@ def _check_wheels(wheels, inertia, dimensionless):
         raise InputError("wheels: reaction wheels need a dimensional body (inertia with units)")
     if len(wheels) > MAX_WHEELS:
         raise InputError(f"wheels: {len(wheels)} wheels, more than {MAX_WHEELS}")
-    J = (np.diag(inertia) if np.ndim(inertia) == 1 else inertia) - sum(w.inertia * np.outer(w.axis, w.axis) for w in wheels)
+    I = np.diag(inertia) if np.ndim(inertia) == 1 else inertia
+    J = I - sum(w.inertia * np.outer(w.axis, w.axis) for w in wheels)
     low = float(np.linalg.eigvalsh(J).min())
     if not low > 0:
         raise InputError(f"wheels: the rotors' axial moments leave the body without inertia about an axis "

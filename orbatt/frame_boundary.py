@@ -89,6 +89,8 @@ def principal_control(law, frame):
         raise InputError(f"control: {type(law).__name__} is not known to orbatt.frame_boundary, which turns a law's "
                          "body-fixed settings into the principal frame of a full inertia tensor; give the inertia as "
                          "principal moments")
+    if getattr(law, "actuator", None) == "magnetorquers":
+        _refuse("[control] max_dipole", "the magnetorquers' per-axis dipole limit")
     if law.max_torque is not None:
         _refuse("[control] max_torque", "the PD law's torque limit")
     if law.dump_gain is not None:
@@ -97,7 +99,7 @@ def principal_control(law, frame):
     out.__dict__.pop("_rows", None)
     if law.target_axis is not None:
         out.target_axis = frame.to_principal(law.target_axis)
-    elif law.target in ("orbital", "inertial"):
+    elif law.target not in ("sun", "ground"):  # an attitude target (inertial, or relative to a frame)
         tq = law.target_q if law.target_q is not None else np.array([1.0, 0.0, 0.0, 0.0])
         out.target_q = frame.attitude_to_principal(tq)
     return out
@@ -181,10 +183,10 @@ def principal_trajectory(tr):
     frame = getattr(tr.body, "frame", None)
     if frame is None:
         return tr
-    control = tr.control if tr.control is not getattr(tr.potential, "control", None) else None
     pot = principal_potential(tr.potential, frame)
-    return dataclasses.replace(tr, body=tr.body.principal, potential=pot,
-                               control=principal_control(control, frame) if control is not None else getattr(pot, "control", None),
+    carried = getattr(tr.potential, "control", None)
+    control = getattr(pot, "control", None) if tr.control is carried else principal_control(tr.control, frame)
+    return dataclasses.replace(tr, body=tr.body.principal, potential=pot, control=control,
                                q=frame.attitude_to_principal(tr.q), Q=frame.attitude_to_principal(tr.Q))
 
 
@@ -206,9 +208,15 @@ def body_variables(body, data, coords):
     frame = body.frame
     inertia = data["inertia"]
     lead = inertia.dims[:-1]
-    tensor = np.broadcast_to(np.array(body.tensor), tuple(np.shape(inertia.values)[:-1]) + (3, 3))
+    moments = np.asarray(inertia.values, dtype=np.float64)  # (3,) or (E, 3): each member's (ensembles over bodies)
+    own = np.array(body.tensor)
+    tensor = np.empty(moments.shape[:-1] + (3, 3))
+    for idx in np.ndindex(moments.shape[:-1]):
+        m = moments[idx]
+        tensor[idx] = own if np.array_equal(m, body.inertia_value) else (
+            np.diag(m) if frame is None else frame.R @ np.diag(m) @ frame.R.T)
     data = dict(data)
-    data["inertia_tensor"] = Var(lead + ("axis", "axis_column"), np.array(tensor), {
+    data["inertia_tensor"] = Var(lead + ("axis", "axis_column"), tensor, {
         "units": inertia.attrs["units"], "frame": "B",
         "long_name": "inertia tensor about the centre of mass (body components)",
         "comment": "as given ([body] inertia); off-diagonal entries I_xy = -integral of x y dm; "

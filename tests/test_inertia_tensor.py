@@ -243,3 +243,40 @@ def test_sweeps_of_a_full_tensor_are_refused():
             'high = "10 deg" }'
     with pytest.raises(ScenarioError, match=r"\[sweep\].*full tensor"):
         load_scenario(_text(_matrix(TENSOR), sweep=sweep))
+
+
+def test_heavy_top_centre_of_mass_in_the_body_frame():
+    xc = np.array([0.0, 0.01, 0.3])
+    t = np.linspace(0.0, 2.0, 5)
+
+    def run(inertia, com, q0, w0):
+        body = orbatt.RigidBody(inertia)
+        top = orbatt.HeavyTop(2.0, com, dimensionless=True)
+        return orbatt.propagate(body, orbatt.State.from_omega(body, q0, w0), top, t, rtol=1e-12, atol=1e-12)
+
+    p = run(I_P.tolist(), xc, Q0, W0 * 100)
+    b = run(TENSOR.tolist(), _b(xc), _qb(Q0), _b(W0 * 100))
+    assert _angle(_qb(p.q), b.q) < 1e-12
+    assert np.abs(qt.mul(p.Q, qt.conj(R_Q)) - b.Q).max() < 1e-12 * np.abs(p.Q).max()
+
+
+def test_bdot_is_refused_with_a_full_tensor():
+    body = orbatt.RigidBody(TENSOR * u.kg * u.m**2)
+    st = orbatt.State.from_omega(body, [1, 0, 0, 0], [0.01, 0, 0] * u.rad / u.s)
+    law = orbatt.BDotControl("1e4 A m2 s / T", "0.2 A m2")
+    with pytest.raises(InputError, match="max_dipole.*principal axes"):
+        orbatt.propagate(body, st, orbatt.TorqueFree(), [0.0, 1.0], control=law)
+
+
+def test_an_ensemble_of_states_of_a_tensor_body_is_each_member_alone():
+    body = orbatt.RigidBody(TENSOR * u.kg * u.m**2)
+    q0 = np.array([_qb(Q0), [1.0, 0.0, 0.0, 0.0]])
+    w0 = np.array([_b(W0), [0.002, 0.001, -0.003]])
+    t = np.linspace(0.0, 300.0, 4)
+    ens = orbatt.propagate(body, orbatt.State.from_omega(body, q0, w0 * u.rad / u.s), orbatt.TorqueFree(), t)
+    for e in range(2):
+        one = orbatt.propagate(body, orbatt.State.from_omega(body, q0[e], w0[e] * u.rad / u.s), orbatt.TorqueFree(), t)
+        assert np.array_equal(ens.q[e], one.q)
+    ds = orbatt.to_dataset(ens)
+    assert ds.inertia_tensor.dims == ("case", "axis", "axis_column")
+    assert np.allclose(ds.inertia_tensor.values[1], TENSOR, rtol=0, atol=1e-16)
