@@ -75,6 +75,10 @@ def principal_control(law, frame):
     ``P`` (module docstring); ``law`` itself when ``frame`` is None."""
     if frame is None or law is None:
         return law
+    if getattr(law, "navigation", None) is not None:  # (issue 33) sensors' axes and noise per body axis
+        raise InputError("[sensors]: the sensors' axes (boresight, noise and bias per body axis) and the filter's "
+                         "outputs are not turned into the principal frame of a full [body] inertia tensor yet; give "
+                         "[body] inertia as principal moments in principal axes")
     if isinstance(law, ModeSequence):
         out = copy.copy(law)
         out.modes = []

@@ -39,6 +39,7 @@ from .core import kernel_floats
 from .core import gyrostat as kg
 from .core import potentials as kp
 from .dataset.control import mode_column
+from .dataset.navigation import estimate_at, knowledge_error, navigation_column
 from .laws import LAWS, MODE_SEQUENCE, law_of
 from .methods.problem import kernel_spec
 from .pointing import INDEX_KINDS, index_attrs, index_value
@@ -117,6 +118,9 @@ NEEDS = {
                "a [control] law holding a target (law = 'pd', target = 'orbital' or 'inertial')"),
     "modes": (lambda control, wheels: control is not None and law_of(control) is MODE_SEQUENCE,
               "a mode sequence ([[control.modes]])"),
+    # (the scenario parser marks the law's settings it hands the [sweep] table with the estimator)
+    "estimator": (lambda control, wheels: control is not None and bool(control.get("estimator")),
+                  "an attitude filter ([estimator] with [sensors])"),
 }
 
 
@@ -360,6 +364,15 @@ class Case:
         return self.pointing(self.t, self.q)
 
     @cached_property
+    def knowledge_error(self):
+        """``(N, 3)`` the rotation vector (rad, body axes) from the filter's estimate to the truth,
+        as the run's Dataset has it (:mod:`orbatt.dataset.navigation`)."""
+        nw = len(self.body.wheels)
+        col, _ = navigation_column(kernel_spec(self.potential, [self.body]), nw)
+        z = self.h[:, nw:]
+        return knowledge_error(self.q, estimate_at(self.t, z, col))
+
+    @cached_property
     def wheel_speed(self):
         """``(N, n)`` each wheel's speed relative to the body, rad/s."""
         wheels, omega, t, h = self.body.wheels, self.omega, self.t, self.h
@@ -562,6 +575,12 @@ OUTPUTS = {o.key: o for o in (
                    lambda c: c.pointing_error),
     pointing_index("mpe", "mean performance error (the pointing error's mean over its stability window)",
                    lambda c: c.pointing_error),
+    pointing_index("ake", "absolute knowledge error (the rotation from the filter's estimate to the truth)",
+                   lambda c: c.knowledge_error, needs=("estimator",), keys=()),
+    pointing_index("rke", "relative knowledge error (the knowledge error minus its stability window's mean)",
+                   lambda c: c.knowledge_error, needs=("estimator",), keys=()),
+    pointing_index("mke", "mean knowledge error (the knowledge error's mean over its stability window)",
+                   lambda c: c.knowledge_error, needs=("estimator",), keys=()),
 )}
 #: the outputs that are ECSS pointing indices (they read [sweep] requirement)
 POINTING_INDICES = tuple(o.key for o in OUTPUTS.values() if "requirement" in o.keys)

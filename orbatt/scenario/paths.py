@@ -165,7 +165,8 @@ def toml_text(data):
 #: table's path without indices and its name (``KEY_DOCS``' numeric defaults): a swept path may
 #: name such a key, its nominal value being the default
 DEFAULT_LEAVES = {("body.facets", "drag_coefficient"): 2.2, ("body.facets", "specular"): 0.0,
-                  ("body.facets", "diffuse"): 0.0, ("body.wheels", "speed"): "0.0 rad / s"}
+                  ("body.facets", "diffuse"): 0.0, ("body.wheels", "speed"): "0.0 rad / s",
+                  ("sensors", "case"): 0, ("sensors.gyro", "rrw"): "0.0 rad / s(3/2)"}
 
 #: tables whose keys a sweep does not vary: the output times and the method are shared by all cases
 FIXED_TABLES = ("sweep", "integration", "name", "description")

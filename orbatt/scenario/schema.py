@@ -369,7 +369,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     if "sweep" in data:
         sweep = parse_sweep_table(ctx, data["sweep"], dimensionless=dimless, potential_kind=kind, orbit=orbit,
                                   frame=frame, conservative=control is None and torques is None,
-                                  control=None if control is None else control["control"],
+                                  control=_sweep_control(control),
                                   wheels=0 if control is None else len(control["wheels"]), data=data)
         check_sweep(ctx, sweep, tensor)
     name = data.get("name", Path(source).stem)
@@ -379,6 +379,15 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     return Spec(name=name, description=desc, text=text, dimensionless=dimless, inertia=inertia,
                 potential_kind=kind, heavy_top=heavy, initial=initial, frame=frame, orbit=orbit,
                 integration=integ, sweep=sweep, torques=torques, control=control, inertia_tensor=tensor)
+
+
+def _sweep_control(control):
+    """The law's settings the ``[sweep]`` table checks its outputs against, marked with whether
+    an attitude filter runs (the knowledge indices need one)."""
+    if control is None or control["control"] is None:
+        return None
+    nav = control.get("navigation")
+    return {**control["control"], "estimator": nav is not None and nav["estimator"] is not None}
 
 
 def _check_normalized_orbit(ctx, o):

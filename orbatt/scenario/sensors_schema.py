@@ -39,7 +39,7 @@ rate  frequency                   required  sampling rate: the base tick of the 
 arw   noise density, angle / time^(1/2)  required  angle random walk sigma_v (e.g. '0.15 deg/sqrt(h)'): rate noise
                                             sigma_v / sqrt(dt) per sample
 rrw   noise density, angle / time^(3/2)  0         rate random walk sigma_u of the bias (e.g. '0.3 deg / h(3/2)')
-bias  angular rate, 3 values      0         the true bias at the start (body axes)
+bias  angular rate, 3 values      zero      the true bias at the start (body axes)
 
 [sensors.star_tracker]
 rate             frequency        required  sampling rate: the gyro's rate divided by an integer

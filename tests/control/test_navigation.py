@@ -318,7 +318,8 @@ def test_a_sweep_case_is_its_single_run_bitwise_in_any_chunk(tmp_path):
 [sweep]
 samples = 4
 seed = 3
-outputs = ["trajectory"]
+outputs = ["trajectory", "ake", "rke", "mke"]
+stability_window = "10 s"
 
 [sweep.parameters]
 "control.kp" = { distribution = "uniform", low = "3e-3 N m", high = "5e-3 N m" }
@@ -337,6 +338,12 @@ outputs = ["trajectory"]
         for ds in (whole.isel(case=k), part.sel(case=k)):
             for name in ("q", "knowledge_error", "bias_estimate", "gyro_bias", "knowledge_sigma"):
                 np.testing.assert_array_equal(ds[name].values, one[name].values)
+        # the knowledge indices (ECSS): their definition recomputed from the single run
+        from orbatt.pointing import index_value
+        t = np.arange(0.0, 61.0, 5.0)
+        for name in ("ake", "rke", "mke"):
+            want = index_value(name, t, one["knowledge_error"].values, 0.9973, 10.0)
+            assert whole[name].values[k] == want
     assert not np.array_equal(whole["gyro_bias"].isel(case=0).values, whole["gyro_bias"].isel(case=1).values)
 
 
@@ -358,3 +365,25 @@ def test_scenario_keys_are_checked_where_they_enter(tmp_path):
             orbatt.load_scenario(p)
     p.write_text(base.replace('period = "0.1 s"\n', 'period = "0.1 s"\nfeedback = "truth"\n', 1))
     assert orbatt.load_scenario(p).potential.control.navigation.feedback == "truth"
+
+
+def test_knowledge_indices_need_an_estimator(tmp_path):
+    from orbatt.errors import ScenarioError
+
+    text = _fine_pointing_text()
+    text = text[:text.index("[estimator]")] + text[text.index('bias_sigma = "10 deg/h"\n') + 24:]
+    p = tmp_path / "no-filter.toml"
+    p.write_text(text + '\n[sweep]\nsamples = 2\noutputs = ["ake"]\n\n[sweep.parameters]\n'
+                        '"control.kp" = { distribution = "uniform", low = "3e-3 N m", high = "5e-3 N m" }\n')
+    with pytest.raises(ScenarioError, match=r"'ake' needs an attitude filter"):
+        orbatt.load_scenario(p)
+
+
+def test_a_full_inertia_tensor_with_sensors_is_refused():
+    """The sensors' body axes are not turned into a tensor's principal frame yet: refused, named."""
+    R = qt.to_matrix(qt.normalize(np.array([0.9, 0.2, -0.1, 0.3])))
+    tensor = R @ np.diag([0.03, 0.04, 0.02]) @ R.T * u.kg * u.m**2
+    body = orbatt.RigidBody(tensor)
+    state = orbatt.State.from_omega(body, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0] * u.rad / u.s)
+    with pytest.raises(InputError, match=r"\[sensors\].*principal"):
+        orbatt.propagate(body, state, orbatt.TorqueFree(), [0.0, 1.0], control=_idle_law(_nav()))

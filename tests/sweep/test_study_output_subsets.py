@@ -40,6 +40,15 @@ def _modes(t_end):
     return re.sub(r'\[control\]\nlaw = "bdot"\n[^\[]*', lambda m: modes, _short("cubesat-bdot-detumble", t_end))
 
 
+def _estimator(t_end):
+    """The PD law on wheels at 10 Hz on the estimate of a gyro, a star tracker and the MEKF
+    (the knowledge indices read the filter's estimate)."""
+    text = _short("lvlh-hold-wheels", t_end).replace("[control]\n", '[control]\nperiod = "0.1 s"\n', 1)
+    return text + ('\n[sensors]\nseed = 5\n\n[sensors.gyro]\nrate = "10 Hz"\narw = "0.15 deg/sqrt(h)"\n\n'
+                   '[sensors.star_tracker]\nrate = "1 Hz"\nnoise = "10 arcsec"\n\n[estimator]\nkind = "mekf"\n'
+                   'attitude_sigma = "0.1 deg"\nbias_sigma = "10 deg/h"\n')
+
+
 #: name: (scenario text, the swept parameter, the keys an output needs)
 SCENARIOS = {
     "wheels": (_short("lvlh-hold-wheels", '"200 s"'), 'omega1 = { values = ["0.5 deg/s", "0.1 deg/s"] }',
@@ -50,11 +59,14 @@ SCENARIOS = {
                     {"detumble_time": "detumble_rate = 1.0", "settling_time": 'settling_angle = "25 deg"'}),
     "modes": (_modes('"300 s"'), 'omega1 = { values = ["4 deg/s", "-2 deg/s"] }',
               {"detumble_time": 'detumble_rate = "5 deg/s"', "settling_time": 'settling_angle = "25 deg"'}),
+    "estimator": (_estimator('"200 s"'), 'omega1 = { values = ["0.5 deg/s", "0.1 deg/s"] }',
+                  {"detumble_time": 'detumble_rate = "0.5 deg/s"', "settling_time": 'settling_angle = "25 deg"'}),
 }
 for _name, (_, _, _keys) in SCENARIOS.items():  # slew_time reads settling_time's threshold
     _keys["slew_time"] = _keys["settling_time"]
     # the mean and relative pointing indices read the stability window (a plain number: normalized time)
     _keys["rpe"] = _keys["mpe"] = "stability_window = 0.2" if _name == "torque-free" else 'stability_window = "100 s"'
+    _keys["rke"] = _keys["mke"] = _keys["rpe"]
 #: the variables each output writes (its descriptor's)
 VARIABLES = {k: o.names for k, o in SWEEP_OUTPUTS.items()}
 
