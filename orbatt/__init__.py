@@ -39,6 +39,7 @@ _WHERE = {
     "temporal_quantile": ".pointing", "ensemble_quantile": ".pointing", "mixed_quantile": ".pointing",
     "interpreted_quantile": ".pointing",
     "Gyro": ".sensors", "StarTracker": ".sensors", "MEKF": ".sensors", "Navigation": ".sensors",
+    "Magnetometer": ".sensors", "SunSensor": ".sensors",
     "with_navigation": ".sensors",
 }
 _SUBMODULES = {"canonical", "euler", "quaternion", "orbital", "methods", "pointing"}
@@ -55,7 +56,7 @@ __all__ = [
     "Sweep", "SweepError", "load_sweep", "run_sweep", "rpm",
     "pointing", "index_series", "window_means", "temporal_quantile", "ensemble_quantile", "mixed_quantile",
     "interpreted_quantile",
-    "Gyro", "StarTracker", "MEKF", "Navigation", "with_navigation",
+    "Gyro", "StarTracker", "Magnetometer", "SunSensor", "MEKF", "Navigation", "with_navigation",
 ]
 
 

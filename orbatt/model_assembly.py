@@ -181,5 +181,5 @@ def assemble(potential, bodies, control=None) -> KernelSpec:
         navigation = getattr(control, "navigation", None)
         if navigation is not None:  # the sensors and the filter (orbatt.sensors): their state after the laws'
             z0 = 8 + len(wheels) + sum(int(p[kc.CTL_NZ]) for k, p, _ in own if k in FLIGHT_SOFTWARE_KINDS)
-            rows.append(navigation.model_row(z0, tables))
+            rows.extend(navigation.model_rows(z0, tables))
     return KernelSpec(*km.build(orbit=orbit_row, terms=rows))

@@ -25,7 +25,8 @@ from .core import estimator as ke
 from .core import model as km
 from .errors import InputError
 
-__all__ = ["Gyro", "StarTracker", "MEKF", "Navigation", "with_navigation", "FEEDBACKS", "PERIOD_TOLERANCE"]
+__all__ = ["Gyro", "StarTracker", "Magnetometer", "SunSensor", "MEKF", "Navigation", "with_navigation", "FEEDBACKS",
+           "PERIOD_TOLERANCE"]
 
 #: the laws' inputs: the filter's estimate or the true state
 FEEDBACKS = ("estimate", "truth")
@@ -112,10 +113,14 @@ class StarTracker:
     sun_exclusion, earth_exclusion : Quantity (angle), optional
         Exclusion half-angles from the boresight to the Sun (needs the orbit's epoch) and to
         the Earth's limb. Default: none.
+    misalignment : Quantity (angle), 3 values, optional
+        The mounting error the flight software does not know: the rotation vector (body axes)
+        of ``m`` in ``q_meas = q (x) m (x) [1, eta / 2]``, a bias of the knowledge error.
+        Default: none.
     """
 
     def __init__(self, rate, noise, *, noise_roll=None, boresight=(0.0, 0.0, 1.0), sun_exclusion=None,
-                 earth_exclusion=None):
+                 earth_exclusion=None, misalignment=None):
         self.period = _rate_period(rate, "star_tracker rate")
         self.noise = scalar_value(noise, u.rad, "star_tracker noise", nonnegative=True)
         self.noise_roll = (self.noise if noise_roll is None else
@@ -128,6 +133,19 @@ class StarTracker:
                                           allow_none=True)
         self.earth_exclusion = scalar_value(earth_exclusion, u.rad, "star_tracker earth_exclusion",
                                             nonnegative=True, allow_none=True)
+        self.misalignment = np.zeros(3) if misalignment is None else _vector(misalignment, u.rad,
+                                                                              "star_tracker misalignment")
+        if np.linalg.norm(self.misalignment) > math.pi:
+            raise InputError(f"star_tracker misalignment: {misalignment!r} is a rotation of more than 180 deg; give "
+                             "the small rotation vector of the mounting error")
+
+    def misalignment_quaternion(self):
+        """``m = exp(misalignment / 2)``: the mounting error in ``q_meas = q (x) m (x) [1, eta / 2]``."""
+        v = self.misalignment
+        a = float(np.linalg.norm(v))
+        if a == 0.0:
+            return np.array([1.0, 0.0, 0.0, 0.0])
+        return np.concatenate([[math.cos(0.5 * a)], math.sin(0.5 * a) * v / a])
 
     def sigma(self):
         """The 1-sigma noise per body axis (rad): ``noise`` across the boresight, ``noise_roll``
@@ -138,6 +156,52 @@ class StarTracker:
 
     def __repr__(self):
         return f"StarTracker(period={self.period:g} s, noise={self.noise:.3g} rad, boresight={self.boresight.tolist()})"
+
+
+class Magnetometer:
+    """A three-axis magnetometer for the filter's vector updates: ``B_meas = B_body + bias +
+    eta``, ``eta ~ N(0, noise^2)`` per body axis; the filter predicts ``B`` from the run's field
+    model (IGRF or the dipole) and does not estimate the bias.
+
+    Parameters
+    ----------
+    rate : Quantity (frequency, or time: the period)
+        An integer divisor of the gyro's rate.
+    noise : Quantity (magnetic flux density)
+        1-sigma noise per axis.
+    bias : Quantity (magnetic flux density), 3 values or one, optional
+        A constant bias (body axes), unknown to the filter. Default 0.
+    """
+
+    def __init__(self, rate, noise, bias=None):
+        self.period = _rate_period(rate, "magnetometer rate")
+        self.noise = scalar_value(noise, u.T, "magnetometer noise", positive=True)
+        self.bias = np.zeros(3) if bias is None else _vector(bias, u.T, "magnetometer bias")
+
+    def __repr__(self):
+        return f"Magnetometer(period={self.period:g} s, noise={self.noise:.3g} T)"
+
+
+class SunSensor:
+    """A Sun sensor for the filter's vector updates: the unit vector to the Sun in body axes
+    with ``noise`` per axis (then normalized); no measurement in the Earth's (cylindrical)
+    shadow. Needs the orbit's epoch.
+
+    Parameters
+    ----------
+    rate : Quantity (frequency, or time: the period)
+        An integer divisor of the gyro's rate.
+    noise : Quantity (angle)
+        1-sigma noise per axis.
+    """
+
+    def __init__(self, rate, noise):
+        self.period = _rate_period(rate, "sun_sensor rate")
+        self.noise = scalar_value(noise, u.rad, "sun_sensor noise", positive=True)
+        self.bias = np.zeros(3)
+
+    def __repr__(self):
+        return f"SunSensor(period={self.period:g} s, noise={self.noise:.3g} rad)"
 
 
 class MEKF:
@@ -175,17 +239,28 @@ class Navigation:
     gyro : Gyro, optional
     star_tracker : StarTracker, optional
     estimator : MEKF, optional
-        Needs a gyro (its propagation) and a star tracker (its updates).
+        Needs a gyro (its propagation) and a sensor to update with: the star tracker, and the
+        vector sensors when the star tracker's last sample failed (or there is none).
+    magnetometer : Magnetometer, optional
+    sun_sensor : SunSensor, optional
     feedback : {"estimate", "truth"}, optional
         What the control law acts on; default the estimate with an estimator, else the truth.
     """
 
-    def __init__(self, seed, *, case=0, gyro=None, star_tracker=None, estimator=None, feedback=None):
+    def __init__(self, seed, *, case=0, gyro=None, star_tracker=None, estimator=None, feedback=None,
+                 magnetometer=None, sun_sensor=None):
         for name, v in (("seed", seed), ("case", case)):
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 0 <= int(v) < 2 ** 53:
                 raise InputError(f"sensors {name}: {v!r} must be an integer in [0, 2^53)")
         if gyro is None and star_tracker is None:
-            raise InputError("sensors: no sensor; give [sensors.gyro] and/or [sensors.star_tracker]")
+            raise InputError("sensors: no gyro and no star tracker; give [sensors.gyro] and/or [sensors.star_tracker] "
+                             "(the magnetometer and the Sun sensor update the filter between them)")
+        if magnetometer is not None and not isinstance(magnetometer, Magnetometer):
+            raise InputError(f"magnetometer: expected orbatt.Magnetometer, got {type(magnetometer).__name__}")
+        if sun_sensor is not None and not isinstance(sun_sensor, SunSensor):
+            raise InputError(f"sun_sensor: expected orbatt.SunSensor, got {type(sun_sensor).__name__}")
+        if (magnetometer is not None or sun_sensor is not None) and estimator is None:
+            raise InputError("magnetometer / sun_sensor: they update the attitude filter; add [estimator] kind = 'mekf'")
         if gyro is not None and not isinstance(gyro, Gyro):
             raise InputError(f"gyro: expected orbatt.Gyro, got {type(gyro).__name__}")
         if star_tracker is not None and not isinstance(star_tracker, StarTracker):
@@ -193,10 +268,11 @@ class Navigation:
         if estimator is not None:
             if not isinstance(estimator, MEKF):
                 raise InputError(f"estimator: expected orbatt.MEKF, got {type(estimator).__name__}")
-            if gyro is None or star_tracker is None:
-                missing = "[sensors.gyro]" if gyro is None else "[sensors.star_tracker]"
-                raise InputError(f"estimator: the MEKF propagates with a gyro and updates with a star tracker; add "
-                                 f"{missing} (vector sensors are not modelled yet)")
+            if gyro is None:
+                raise InputError("estimator: the MEKF propagates with a gyro; add [sensors.gyro]")
+            if star_tracker is None and magnetometer is None and sun_sensor is None:
+                raise InputError("estimator: the MEKF needs a sensor to update with; add [sensors.star_tracker], "
+                                 "[sensors.magnetometer] or [sensors.sun_sensor]")
         if feedback is None:
             feedback = "estimate" if estimator is not None else "truth"
         if feedback not in FEEDBACKS:
@@ -205,15 +281,18 @@ class Navigation:
             raise InputError("feedback: 'estimate' needs an estimator ([estimator] kind = 'mekf'); or use 'truth'")
         self.seed, self.case = int(seed), int(case)
         self.gyro, self.star_tracker, self.estimator, self.feedback = gyro, star_tracker, estimator, feedback
+        self.magnetometer, self.sun_sensor = magnetometer, sun_sensor
         self.period = gyro.period if gyro is not None else star_tracker.period
-        self.every = 0
-        if star_tracker is not None:
-            n = star_tracker.period / self.period
-            if abs(n - round(n)) > PERIOD_TOLERANCE * n or round(n) < 1:
-                raise InputError(f"star_tracker rate: its period {star_tracker.period:g} s is not an integer multiple "
-                                 f"of the gyro's {self.period:g} s (the sensors share one base tick); choose rates "
-                                 "such as 10 Hz and 1 Hz")
-            self.every = int(round(n))
+        self.every = 0 if star_tracker is None else self._every(star_tracker, "star_tracker")
+
+    def _every(self, sensor, name):
+        """How many base ticks between ``sensor``'s samples (an integer, refused otherwise)."""
+        n = sensor.period / self.period
+        if abs(n - round(n)) > PERIOD_TOLERANCE * n or round(n) < 1:
+            raise InputError(f"{name} rate: its period {sensor.period:g} s is not an integer multiple of the gyro's "
+                             f"{self.period:g} s (the sensors share one base tick); choose rates such as 10 Hz and "
+                             "1 Hz")
+        return int(round(n))
 
     def check_law(self, law):
         """Refuse a control law whose ticks are not ticks of the sensors: a law on the estimate
@@ -234,6 +313,25 @@ class Navigation:
         """Whether the star tracker's Sun exclusion reads the Sun's position."""
         return self.star_tracker is not None and self.star_tracker.sun_exclusion is not None
 
+    @property
+    def reads_field(self):
+        """Whether a magnetometer reads the run's magnetic field model."""
+        return self.magnetometer is not None
+
+    def model_rows(self, z0, tables):
+        """The kernel rows: :meth:`model_row`, then a :data:`~orbatt.core.model.VECTOR_SENSOR`
+        row per vector sensor (its table: ``tables("field")`` or ``tables("sun")``)."""
+        rows = [self.model_row(z0, tables)]
+        if self.magnetometer is not None:
+            m = self.magnetometer
+            rows.append((km.VECTOR_SENSOR, ke.vector_params(ke.MAGNETOMETER, self._every(m, "magnetometer"), m.noise,
+                                                            m.bias), tables("field")))
+        if self.sun_sensor is not None:
+            ss = self.sun_sensor
+            rows.append((km.VECTOR_SENSOR, ke.vector_params(ke.SUN_SENSOR, self._every(ss, "sun_sensor"), ss.noise),
+                         tables("sun")))
+        return rows
+
     def model_row(self, z0, tables):
         """The :data:`~orbatt.core.model.NAVIGATION` row ``(kind, params, table)``: its state at
         ``y[z0:]``; ``tables("sun")`` the Sun's position along the orbit (Sun exclusion)."""
@@ -244,7 +342,7 @@ class Navigation:
             star_tracker=None if st is None else (
                 self.every, st.sigma(), st.boresight,
                 -1.0 if st.sun_exclusion is None else st.sun_exclusion,
-                -1.0 if st.earth_exclusion is None else st.earth_exclusion),
+                -1.0 if st.earth_exclusion is None else st.earth_exclusion, st.misalignment_quaternion()),
             filter=None if f is None else (f.attitude_sigma, f.bias_sigma),
             feedback=self.feedback == "estimate", earth_radius=EARTH_RADIUS_KM)
         return (km.NAVIGATION, params, tables("sun") if self.reads_sun else None)
@@ -266,7 +364,8 @@ class Navigation:
 
     def __repr__(self):
         parts = [f"seed={self.seed}", f"case={self.case}"]
-        parts += [repr(x) for x in (self.gyro, self.star_tracker, self.estimator) if x is not None]
+        parts += [repr(x) for x in (self.gyro, self.star_tracker, self.magnetometer, self.sun_sensor, self.estimator)
+                  if x is not None]
         return f"Navigation({', '.join(parts)}, feedback={self.feedback!r})"
 
 

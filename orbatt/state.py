@@ -251,7 +251,10 @@ class State:
             raise InputError(f"t: {t!r} is not a time (a float in the body's time unit)") from None
         if not math.isfinite(tv):
             raise InputError(f"t: {t!r} is not finite")
-        st = cls(body, y[..., :4], y[..., 4:8])  # the checks of q and Q
+        # the checks of q (a unit quaternion); Q is an integrated state carried as it is: its
+        # tangency q.Q ~ 0 is the integration's (relative to |Q| it fails for a body near rest,
+        # |Q| ~ 1e-22 and q.Q ~ 1e-25 after a slew on wheels), kept as radial_residual
+        st = cls(body, y[..., :4], np.zeros_like(y[..., 4:8]))
         st.q = np.ascontiguousarray(y[..., :4])  # bit for bit (State() normalizes q)
         st.Q = np.ascontiguousarray(y[..., 4:8])
         st.radial_residual = qt.dot(st.q, st.Q)

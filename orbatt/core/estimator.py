@@ -50,8 +50,9 @@ from .control import FLIGHT_SOFTWARE
 from .qalg import qconj, qmul, rotate_inv
 from .slots import Slots
 
-__all__ = ["NAV", "STATE", "NZ", "nav_params", "propagate_estimate", "covariance_step", "attitude_update",
-           "navigation_tick", "estimate_feedback"]
+__all__ = ["NAV", "STATE", "NZ", "VEC", "MAGNETOMETER", "SUN_SENSOR", "nav_params", "vector_params",
+           "propagate_estimate", "covariance_step", "attitude_update", "vector_update", "navigation_tick",
+           "vector_tick", "estimate_feedback"]
 
 #: the parameter layout of a navigation row (module docstring): the flight-software slots, the
 #: noise key (``seed``, ``case``), the gyro (``gyro`` 1/0, ``arw`` sv, ``rrw`` su, the initial true
@@ -61,10 +62,17 @@ __all__ = ["NAV", "STATE", "NZ", "nav_params", "propagate_estimate", "covariance
 #: the laws act on the estimate)
 NAV = Slots(*FLIGHT_SOFTWARE, ("seed", 1), ("case", 1), ("gyro", 1), ("arw", 1), ("rrw", 1), ("bias", 3),
             ("st_every", 1), ("st_noise", 3), ("boresight", 3), ("sun_exclusion", 1), ("earth_exclusion", 1),
-            ("earth_radius", 1), ("filter", 1), ("attitude_sigma", 1), ("bias_sigma", 1), ("feedback", 1))
+            ("earth_radius", 1), ("filter", 1), ("attitude_sigma", 1), ("bias_sigma", 1), ("feedback", 1),
+            ("st_mis", 4))
 #: the discrete state's layout (offsets from ``z0``; module docstring)
 STATE = Slots(("q_hat", 4), ("b_hat", 3), ("P", 36), ("beta", 3), ("w_meas", 3), ("q_meas", 4), ("valid", 1),
-              ("t_last", 1))
+              ("t_last", 1), ("st_ok", 1), ("vector", 1))
+#: a vector sensor's row (:data:`~orbatt.core.model.VECTOR_SENSOR`, after the navigation row):
+#: ``which`` (:data:`MAGNETOMETER` or :data:`SUN_SENSOR`), sampled every ``every`` base ticks,
+#: 1-sigma ``noise`` per axis (T, or rad for the Sun sensor's unit vector) and the magnetometer's
+#: ``bias`` (T, body axes: not estimated); its table: the field ``B`` or the Sun's position
+VEC = Slots(("which", 1), ("every", 1), ("noise", 1), ("bias", 3))
+MAGNETOMETER, SUN_SENSOR = 1, 2
 #: the size of the state
 NZ = STATE.size
 
@@ -75,6 +83,9 @@ _ST_EVERY, _ST_NOISE, _BORE, _SUN_EX, _EARTH_EX, _RE = (NAV.st_every, NAV.st_noi
 _FILTER, _SIG_A, _SIG_B, _FEEDBACK = NAV.filter, NAV.attitude_sigma, NAV.bias_sigma, NAV.feedback
 _ZQ, _ZB, _ZP, _ZBETA, _ZW, _ZQM, _ZVALID, _ZT = (STATE.q_hat, STATE.b_hat, STATE.P, STATE.beta, STATE.w_meas,
                                                   STATE.q_meas, STATE.valid, STATE.t_last)
+_ZOK, _ZVEC = STATE.st_ok, STATE.vector
+_ST_MIS = NAV.st_mis
+_V_WHICH, _V_EVERY, _V_NOISE, _V_BIAS = VEC.which, VEC.every, VEC.noise, VEC.bias
 
 
 def nav_params(period, z0, *, seed, case=0, gyro=None, star_tracker=None, filter=None, feedback=False,
@@ -91,9 +102,10 @@ def nav_params(period, z0, *, seed, case=0, gyro=None, star_tracker=None, filter
         The noise key (:mod:`orbatt.core.noise`).
     gyro : (arw, rrw, bias (3,)) or None
         ``sv`` (rad/s^(1/2)), ``su`` (rad/s^(3/2)), the initial true bias (rad/s).
-    star_tracker : (every, noise (3,), boresight (3,), sun_exclusion, earth_exclusion) or None
+    star_tracker : (every, noise (3,), boresight (3,), sun_exclusion, earth_exclusion, mis (4,)) or None
         Sample every ``every`` ticks; 1-sigma noise per body axis (rad); the unit boresight
-        (body); exclusion half-angles (rad; negative: none).
+        (body); exclusion half-angles (rad; negative: none); its mounting's misalignment, the
+        quaternion ``m`` of ``q_meas = q (x) m (x) [1, eta / 2]`` (unknown to the filter).
     filter : (attitude_sigma, bias_sigma) or None
         The MEKF's initial 1-sigma errors (rad, rad/s); the initial estimate's error is drawn
         from ``attitude_sigma``.
@@ -103,13 +115,19 @@ def nav_params(period, z0, *, seed, case=0, gyro=None, star_tracker=None, filter
     if not period > 0.0:
         raise ValueError("navigation: the base tick must be > 0")
     g = (0.0, 0.0, (0.0, 0.0, 0.0)) if gyro is None else gyro
-    st = (0, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), -1.0, -1.0) if star_tracker is None else star_tracker
+    st = (0, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), -1.0, -1.0, (1.0, 0.0, 0.0, 0.0)) if star_tracker is None else \
+        star_tracker
     f = (0.0, 0.0) if filter is None else filter
     return NAV.pack(period=period, phase=phase, z0=float(z0), nz=float(NZ), mode=-1.0, seed=float(seed),
                     case=float(case), gyro=0.0 if gyro is None else 1.0, arw=g[0], rrw=g[1], bias=g[2],
                     st_every=float(st[0]), st_noise=st[1], boresight=st[2], sun_exclusion=st[3],
                     earth_exclusion=st[4], earth_radius=earth_radius, filter=0.0 if filter is None else 1.0,
-                    attitude_sigma=f[0], bias_sigma=f[1], feedback=1.0 if feedback else 0.0)
+                    attitude_sigma=f[0], bias_sigma=f[1], feedback=1.0 if feedback else 0.0, st_mis=st[5])
+
+
+def vector_params(which, every, noise, bias=(0.0, 0.0, 0.0)):
+    """The parameters of a vector sensor's row (:data:`VEC`)."""
+    return VEC.pack(which=float(which), every=float(every), noise=float(noise), bias=bias)
 
 
 @jit_inline
@@ -318,13 +336,19 @@ def navigation_tick(t, y, q, omega, r, xhat, sun, params, p0, start):
             y[z + _ZP + 7 * i] = sa * sa
             y[z + _ZP + 7 * (3 + i)] = sb * sb
     y[z + _ZVALID] = 0.0
+    y[z + _ZVEC] = 0.0
     every = params[p0 + _ST_EVERY]
-    if every > 0.0 and k - every * math.floor(k / every) == 0.0 and _star_tracker_sees(q, params, p0, r, xhat, sun):
+    due = every > 0.0 and k - every * math.floor(k / every) == 0.0
+    if due:
+        y[z + _ZOK] = 0.0
+    if due and _star_tracker_sees(q, params, p0, r, xhat, sun):
+        y[z + _ZOK] = 1.0
         sig = (params[p0 + _ST_NOISE], params[p0 + _ST_NOISE + 1], params[p0 + _ST_NOISE + 2])
         eta = (sig[0] * noise.normal(seed, case, noise.STAR_TRACKER, k, 0.0),
                sig[1] * noise.normal(seed, case, noise.STAR_TRACKER, k, 1.0),
                sig[2] * noise.normal(seed, case, noise.STAR_TRACKER, k, 2.0))
-        qm = _normalized(qmul(q, _small_rotation(eta)))
+        mis = (params[p0 + _ST_MIS], params[p0 + _ST_MIS + 1], params[p0 + _ST_MIS + 2], params[p0 + _ST_MIS + 3])
+        qm = _normalized(qmul(qmul(q, mis), _small_rotation(eta)))
         if qm[0] < 0.0:
             qm = (-qm[0], -qm[1], -qm[2], -qm[3])
         for i in range(4):
@@ -351,3 +375,99 @@ def estimate_feedback(y, params, p0, q, omega):
     z = int(params[p0 + _Z0])
     return ((y[z + _ZQ], y[z + _ZQ + 1], y[z + _ZQ + 2], y[z + _ZQ + 3]),
             (y[z + _ZW] - y[z + _ZB], y[z + _ZW + 1] - y[z + _ZB + 1], y[z + _ZW + 2] - y[z + _ZB + 2]))
+
+
+@jit
+def vector_update(q, b, P, pred, meas, sigma):
+    """The MEKF's update with a vector measurement ``meas`` (body axes) of the predicted
+    ``pred`` (the reference vector in the estimated body axes), 1-sigma ``sigma`` per axis:
+    ``H = [[pred x] 0]`` (``b_true = pred + pred x dtheta``), ``(q, b)`` returned, ``P`` in place
+    (Joseph form)."""
+    H = np.zeros((3, 6))
+    H[0, 1], H[0, 2], H[1, 2] = -pred[2], pred[1], -pred[0]
+    H[1, 0], H[2, 0], H[2, 1] = pred[2], -pred[1], pred[0]
+    PHt = _mm(P, H.T.copy())
+    S = _mm(H, PHt)
+    for i in range(3):
+        S[i, i] += sigma * sigma
+    c00 = S[1, 1] * S[2, 2] - S[1, 2] * S[2, 1]
+    c01 = S[0, 2] * S[2, 1] - S[0, 1] * S[2, 2]
+    c02 = S[0, 1] * S[1, 2] - S[0, 2] * S[1, 1]
+    c11 = S[0, 0] * S[2, 2] - S[0, 2] * S[2, 0]
+    c12 = S[0, 2] * S[1, 0] - S[0, 0] * S[1, 2]
+    c22 = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+    det = S[0, 0] * c00 + S[1, 0] * c01 + S[2, 0] * c02
+    Si = np.empty((3, 3))
+    Si[0, 0], Si[0, 1], Si[0, 2] = c00 / det, c01 / det, c02 / det
+    Si[1, 0], Si[1, 1], Si[1, 2] = c01 / det, c11 / det, c12 / det
+    Si[2, 0], Si[2, 1], Si[2, 2] = c02 / det, c12 / det, c22 / det
+    K = _mm(PHt, Si)
+    res = (meas[0] - pred[0], meas[1] - pred[1], meas[2] - pred[2])
+    dx = np.zeros(6)
+    for i in range(6):
+        dx[i] = K[i, 0] * res[0] + K[i, 1] * res[1] + K[i, 2] * res[2]
+    IKH = np.eye(6) - _mm(K, H)
+    R = np.zeros((3, 3))
+    for i in range(3):
+        R[i, i] = sigma * sigma
+    new = _mm(_mm(IKH, P), IKH.T.copy()) + _mm(_mm(K, R), K.T.copy())
+    for i in range(6):
+        for k in range(6):
+            P[i, k] = 0.5 * (new[i, k] + new[k, i])
+    qn = _normalized(qmul(q, _small_rotation((dx[0], dx[1], dx[2]))))
+    return qn, (b[0] + dx[3], b[1] + dx[4], b[2] + dx[5])
+
+
+@jit_inline
+def _sunlit(r, xhat, sun, earth_radius):
+    """Whether the spacecraft at ``r xhat`` sees the Sun at ``sun`` (km, inertial): outside the
+    Earth's cylindrical shadow."""
+    s = _unit(sun)
+    along = r * (xhat[0] * s[0] + xhat[1] * s[1] + xhat[2] * s[2])
+    if along >= 0.0:
+        return True
+    px, py, pz = r * xhat[0] - along * s[0], r * xhat[1] - along * s[1], r * xhat[2] - along * s[2]
+    return px * px + py * py + pz * pz >= earth_radius * earth_radius
+
+
+@jit
+def vector_tick(t, y, q, r, xhat, ref, params, p0, pv):
+    """A vector sensor's sample at the navigation row's tick ``t`` (row ``params[p0]``; the
+    sensor's row at ``pv``) on the true attitude ``q`` and its reference ``ref`` (inertial: the
+    field ``B``, T, or the Sun's position, km): when due, measured (the Sun sensor: not in the
+    Earth's shadow) and, when the filter runs and the star tracker's last sample failed (or
+    there is none), the filter updated; ``y[z0 + vector]`` counts the updates of this tick."""
+    z = int(params[p0 + _Z0])
+    if params[p0 + _FILTER] == 0.0:
+        return
+    dt = params[p0 + _PERIOD]
+    k = math.floor((t - params[p0 + _PHASE]) / dt + 0.5)
+    every = params[pv + _V_EVERY]
+    if k - every * math.floor(k / every) != 0.0:
+        return
+    if params[p0 + _ST_EVERY] > 0.0 and y[z + _ZOK] > 0.0:  # the star tracker measures: no vector update
+        return
+    which = params[pv + _V_WHICH]
+    sensor = noise.MAGNETOMETER if which == MAGNETOMETER else noise.SUN_SENSOR
+    if which == SUN_SENSOR:
+        if not _sunlit(r, xhat, ref, params[p0 + _RE]):
+            return
+        ref = _unit((ref[0] - r * xhat[0], ref[1] - r * xhat[1], ref[2] - r * xhat[2]))
+    seed, case = params[p0 + _SEED], params[p0 + _CASE]
+    sig = params[pv + _V_NOISE]
+    truth = rotate_inv(q, ref)
+    meas = (truth[0] + params[pv + _V_BIAS] + sig * noise.normal(seed, case, sensor, k, 0.0),
+            truth[1] + params[pv + _V_BIAS + 1] + sig * noise.normal(seed, case, sensor, k, 1.0),
+            truth[2] + params[pv + _V_BIAS + 2] + sig * noise.normal(seed, case, sensor, k, 2.0))
+    if which == SUN_SENSOR:
+        meas = _unit(meas)
+    qh = (y[z + _ZQ], y[z + _ZQ + 1], y[z + _ZQ + 2], y[z + _ZQ + 3])
+    pred = rotate_inv(qh, ref)
+    P = y[z + _ZP:z + _ZP + 36].copy().reshape(6, 6)
+    qn, bn = vector_update(qh, (y[z + _ZB], y[z + _ZB + 1], y[z + _ZB + 2]), P, pred, meas, sig)
+    y[z + _ZP:z + _ZP + 36] = P.ravel()
+    for i in range(4):
+        y[z + _ZQ + i] = qn[i]
+    for i in range(3):
+        y[z + _ZB + i] = bn[i]
+    y[z + _ZVEC] += 1.0

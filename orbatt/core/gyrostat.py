@@ -27,7 +27,7 @@ from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
 from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, R0, R1, WHEELS, orbit_at,
                     orbit_radial, terms_at, time_of_s)
-from .model import MAGNETORQUERS, MOMENTUM_DUMP, NAVIGATION
+from .model import MAGNETORQUERS, MOMENTUM_DUMP, NAVIGATION, VECTOR_SENSOR
 from . import estimator as est
 from .kepler import anomaly_of_time
 from .qalg import cross, qconj, qmul, qmul_pure, rotate_inv, vadd
@@ -384,6 +384,11 @@ def tick(s, y, inertia, terms, params, table, work, start):
                     s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
                     sun = (s4[0], s4[1], s4[2])
                 est.navigation_tick(t, y, q, omega, r, xhat, sun, params, nav, start)
+                for jv in range(j + 1, terms.shape[0]):  # its vector sensors (they follow its row)
+                    if terms[jv, KIND] != VECTOR_SENSOR:
+                        break
+                    v4 = piece_eval(table[terms[jv, R0]:terms[jv, R1]], t, 3, terms[jv, FLAGS], work)
+                    est.vector_tick(t, y, q, r, xhat, (v4[0], v4[1], v4[2]), params, nav, terms[jv, P0])
     # what the flight software knows: the estimate, when the laws act on it (else the truth)
     q, omega = est.estimate_feedback(y, params, nav, q, omega)
     for j in range(1, terms.shape[0]):  # the mode sequence next: its transition, then the laws

@@ -41,6 +41,9 @@ navigation             12    :func:`orbatt.core.estimator.nav_params`: the gyro,
 magnetorquers          13    :func:`orbatt.core.control.magnetorquer_params`: the per-axis dipole
                              limit; table: the field ``B`` (inertial); follows a PD law's row with
                              ``actuator = magnetorquers``, which holds the dipole
+vector sensor          14    :func:`orbatt.core.estimator.vector_params`: a magnetometer or a Sun
+                             sensor updating the MEKF; table: the field ``B`` or the Sun's
+                             position; follows the navigation row
 =====================  ====  =====================================================================
 
 Adding a kind: a :class:`TermKind` here, its kernel (a function of ``(q, c)`` and its
@@ -109,6 +112,10 @@ KINDS = (
     TermKind(12, "navigation", "attitude sensors and their filter", extended=True),
     # magnetorquers making a PD law's torque: the companion row after it, with the field's table
     TermKind(13, "control", "magnetorquers actuating a PD law", orbit=True, table=True, extended=True),
+    # a vector sensor of the navigation (a magnetometer or a Sun sensor, issue 33): its table the
+    # field B or the Sun's position; it follows the NAVIGATION row
+    TermKind(14, "vector_sensor", "a magnetometer or Sun sensor of the attitude filter", orbit=True, table=True,
+             extended=True),
 )
 #: the kinds by code
 BY_CODE = {k.code: k for k in KINDS}

@@ -91,6 +91,7 @@ MOMENTUM_DUMP = 10
 MODES = 11
 NAVIGATION = 12
 MAGNETORQUERS = 13
+VECTOR_SENSOR = 14
 #: what each term kind is, in words (error messages: a method refusing the terms that act)
 KIND_DESCRIPTIONS = {k.code: k.description for k in KINDS}
 

@@ -13,7 +13,8 @@ numpy's SIMD paths are not used). :func:`normal_reference` is the same generator
 Python integers, for the tests.
 
 Sensors (the ``sensor`` word of the key): :data:`GYRO_RATE`, :data:`GYRO_BIAS`,
-:data:`STAR_TRACKER`, :data:`INITIAL_ESTIMATE`; ``channel`` is the axis (0..2).
+:data:`STAR_TRACKER`, :data:`INITIAL_ESTIMATE`, :data:`MAGNETOMETER`, :data:`SUN_SENSOR`; ``channel``
+is the axis (0..2).
 """
 from __future__ import annotations
 
@@ -23,10 +24,11 @@ import numpy as np
 
 from ._jit import jit_inline
 
-__all__ = ["normal", "normal_reference", "GYRO_RATE", "GYRO_BIAS", "STAR_TRACKER", "INITIAL_ESTIMATE"]
+__all__ = ["normal", "normal_reference", "GYRO_RATE", "GYRO_BIAS", "STAR_TRACKER", "INITIAL_ESTIMATE", "MAGNETOMETER",
+           "SUN_SENSOR"]
 
 #: the sensor words of the key
-GYRO_RATE, GYRO_BIAS, STAR_TRACKER, INITIAL_ESTIMATE = 1, 2, 3, 4
+GYRO_RATE, GYRO_BIAS, STAR_TRACKER, INITIAL_ESTIMATE, MAGNETOMETER, SUN_SENSOR = 1, 2, 3, 4, 5, 6
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _M1 = np.uint64(0xBF58476D1CE4E5B9)

@@ -110,6 +110,10 @@ def navigation_variables(model, q, z, t, tdims, nwheels, navigation):
                                           flag_meanings="no_measurement measured",
                                           comment="no measurement at a tick where it was not due, or where the Sun or "
                                                   "the Earth's limb was within its exclusion angle")
+    if navigation.magnetometer is not None or navigation.sun_sensor is not None:
+        data["vector_updates"] = _var(tdims, _slot(z, col, "vector")[..., 0].astype(np.int8), "1",
+                                      "filter updates by the magnetometer and the Sun sensor at the last tick",
+                                      comment="they update the filter while the star tracker is out (or without one)")
     if navigation.estimator is not None:
         qh = estimate_at(t, z, col)
         P = _slot(z, col, "P")

@@ -88,7 +88,7 @@ def markdown() -> str:
             lines += ["The flight software's noisy sensors (issue 33; `docs/flight-software.md`): they sample the "
                       "state at their ticks, before the mode logic and the laws, and feed the `[estimator]`. Every "
                       "random number is a function of (seed, case, sensor, tick, axis).", ""]
-            for sub in ("sensors.gyro", "sensors.star_tracker"):
+            for sub in ("sensors.gyro", "sensors.star_tracker", "sensors.magnetometer", "sensors.sun_sensor"):
                 lines += [f"### `[{sub}]`", ""]
                 lines += _table(((k, KEY_DOCS[sub][k]) for k in KEY_DOCS[sub]), sub) + [""]
         if table == "control":

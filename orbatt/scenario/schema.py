@@ -72,7 +72,7 @@ from .fields import (FieldContext, check_integers, parse_choice, parse_int, pars
 from .sweep_schema import SweepSpec, parse_sweep_table
 from .binary_schema import BinarySpec, is_binary, parse_binary
 from .control_schema import CONTROL_KEYS, parse_control
-from .sensors_schema import FEEDBACK_DOC, SENSOR_KEY_DOCS, SENSOR_TABLES, parse_navigation
+from .sensors_schema import FEEDBACK_DOC, SENSOR_KEY_DOCS, SENSOR_TABLES, parse_navigation, reads_magnetic_field
 from .torques_schema import ENVIRONMENT_KEYS, TORQUE_KEYS, parse_torques
 from ..methods import METHODS
 from ..methods.dop853 import INDEPENDENT_VARIABLES
@@ -342,7 +342,7 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
         raise ctx.error("[orbit]", f"only used by kind = 'gravity-gradient' (this scenario is {kind!r}); remove it")
 
     ctl = data.get("control")
-    torques = parse_torques(ctx, data, kind, orbit, bdot=reads_field(ctl))
+    torques = parse_torques(ctx, data, kind, orbit, bdot=reads_field(ctl) or reads_magnetic_field(data))
     if torques is not None and dimless:
         raise ctx.error("[torques]", "the environment torques need a dimensional scenario ([body] inertia with units)")
     init = data["initial"]
@@ -359,6 +359,8 @@ def parse(text: str, source: str = "<scenario>") -> Spec | BinarySpec:
     navigation = parse_navigation(ctx, data, None if control is None else control["control"], orbit)
     if navigation is not None:
         control["navigation"] = navigation
+        if control["magnetic_field"] is None:  # the field a magnetometer reads (and the filter predicts)
+            control["magnetic_field"] = navigation["magnetic_field"]
     if control is not None and control["wheels"]:
         try:  # the gyrostat must keep inertia about every axis
             RigidBody((inertia if tensor is None else tensor) * U.INERTIA,
