@@ -15,8 +15,10 @@ kernels (which take the offsets as folded constants):
 * PD control (:data:`~orbatt.core.model.PD_CONTROL`): :func:`pd_params`, :data:`PD`:
   ``target, kp, kd, max_torque, actuator, c (4)``, then for wheels the tail ``pinv``: the
   ``(n, 3)`` pseudo-inverse of the ``(3, n)`` matrix of spin axes; ``c`` is the target
-  quaternion (``target = inertial``: target -> S; ``target = orbital``: target -> O, identity
-  by default) or the body axis to point at the Sun (``target = sun``).
+  quaternion (``target = inertial``: target -> S; ``target = orbital`` / ``nadir``: target -> O
+  / N, identity by default) or the body axis to point at the Sun or a ground point.
+* magnetorquers making the PD law's torque (:data:`~orbatt.core.model.MAGNETORQUERS`, the
+  companion row after it): :func:`magnetorquer_params`, :data:`MAGNETORQUER`: ``max_dipole``.
 * B-dot (:data:`~orbatt.core.model.BDOT_CONTROL`): :func:`bdot_params`, :data:`BDOT`:
   ``gain, max_dipole``.
 
@@ -31,11 +33,16 @@ axis clipped to ``tau_max``) with the targets:
 * ``inertial``: a constant ``q_t``, ``omega_t = 0``.
 * ``sun``: ``q_e`` the shortest rotation taking the Sun's direction (body axes) onto the body
   axis ``b``, ``omega_t = 0`` (the Sun's apparent motion, ~2e-7 rad/s, is left out).
+* ``ground``: the same toward a point on the rotating Earth, the line of sight's rate fed forward.
+* ``nadir``: ``q_t = p_N c``, the geodetic nadir frame N (:func:`nadir_target`: O with ``o1``
+  replaced by the WGS84 ellipsoid's normal through the spacecraft, from the row's table).
 
 With ``actuator = wheels`` the commanded torque is made by the wheels: motor torques
 ``u = -A+ tau`` (each clipped to ``u_max``, and to zero when it would push a wheel past
 ``speed_max``); the body feels ``-A u``, an internal torque: the total angular momentum
-does not change. B-dot: ``m = -k dB_B/dt`` (each axis clipped to ``m_max``) with
+does not change. With ``actuator = magnetorquers``: ``m = (B_B x tau) / |B_B|^2`` (each axis
+clipped to ``m_max``), the external torque ``m x B_B``: the command's part normal to the field
+(:func:`torque_dipole`). B-dot: ``m = -k dB_B/dt`` (each axis clipped to ``m_max``) with
 ``dB_B/dt = q~ dB_S/dt q - omega x B_B``; ``tau = m x B_B``.
 """
 from __future__ import annotations
@@ -129,7 +136,7 @@ def law_slots(nz, mode=-1):
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None, period=0.0,
               phase=0.0, z0=8, max_rate=np.inf, ki=0.0, magnetorquers=False):
     """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
-    :data:`TARGET_ORBITAL`, :data:`TARGET_INERTIAL`, :data:`TARGET_SUN`; ``target_values``:
+    the ``TARGET_*`` constants; ``target_values``:
     the target quaternion (relative to the orbital frame for ``TARGET_ORBITAL``; default
     identity) or the body axis (padded to 4); ``wheel_axes (n, 3)``: actuate with
     these wheels (their axes must span the three dimensions), else an ideal torque;
