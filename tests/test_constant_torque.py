@@ -28,10 +28,12 @@ def test_the_kind_is_described_once():
     assert km.CONSTANT_TORQUE not in km.ORBIT_TERMS | km.TABLE_TERMS | km.EXTENDED_KINDS
     # the sets the builder and the loops read, as they were written by hand before the descriptors
     assert km.ORBIT_TERMS == {km.GRAVITY_GRADIENT, km.DRAG, km.SRP, km.MAGNETIC, km.BDOT_CONTROL, km.MOMENTUM_DUMP,
-                              km.MAGNETORQUERS}
+                              km.MAGNETORQUERS, km.VECTOR_SENSOR}
     assert km.VELOCITY_TERMS == {km.DRAG, km.PD_CONTROL}
-    assert km.TABLE_TERMS == {km.DRAG, km.SRP, km.MAGNETIC, km.BDOT_CONTROL, km.MOMENTUM_DUMP, km.MAGNETORQUERS}
-    assert km.EXTENDED_KINDS == {km.WHEELS, km.PD_CONTROL, km.BDOT_CONTROL, km.MOMENTUM_DUMP, km.MODES, km.MAGNETORQUERS}
+    assert km.TABLE_TERMS == {km.DRAG, km.SRP, km.MAGNETIC, km.BDOT_CONTROL, km.MOMENTUM_DUMP, km.MAGNETORQUERS,
+                              km.VECTOR_SENSOR}
+    assert km.EXTENDED_KINDS == {km.WHEELS, km.PD_CONTROL, km.BDOT_CONTROL, km.MOMENTUM_DUMP, km.MODES, km.MAGNETORQUERS,
+                                 km.NAVIGATION, km.VECTOR_SENSOR}
     assert orbatt.torques.TERM_NAMES[km.CONSTANT_TORQUE] == "constant"
 
 

@@ -19,7 +19,8 @@ import math
 
 import numpy as np
 
-from ..pointing import mixed_bounds
+from ..pointing import ensemble_quantile, index_series, mixed_bounds, mixed_quantile
+from .timeaxis import elapsed_values
 
 __all__ = ["index_variables", "pointing_budget", "angle_display", "budget_lines", "WHY_NO_ENSEMBLE"]
 
@@ -54,7 +55,25 @@ def pointing_budget(ds):
                         max=float(np.max(ok)) if ok.size else math.nan, mixed=mixed_bounds(ok), requirement=req,
                         meeting=None if req is None else int(np.count_nonzero(ok <= req)),
                         window=v.attrs.get("stability_window")))
+        out[-1].update(_from_series(ds, name, out[-1]))
     return out
+
+
+#: the error series a sweep result may hold per case and time (its ``trajectory`` output), by
+#: the indices computed from it: the knowledge error (the attitude filter's, rad, body axes)
+SERIES = {"ake": "knowledge_error", "mke": "knowledge_error", "rke": "knowledge_error"}
+
+
+def _from_series(ds, name, row):
+    """``{"ensemble", "mixed_exact"}`` of the index ``name`` from the cases' error series when
+    the result holds them (:data:`SERIES`; a sweep with the ``trajectory`` output), else ``{}``."""
+    var = SERIES.get(name)
+    if var is None or var not in ds or ds[var].dims[:2] != ("case", "time"):
+        return {}
+    t = elapsed_values(ds)
+    e = np.asarray(ds[var].values, dtype=np.float64)
+    x = np.stack([index_series(name, t, e[k], row["window"]) for k in range(e.shape[0])])
+    return {"ensemble": ensemble_quantile(x, row["confidence"]), "mixed_exact": mixed_quantile(x, row["confidence"])}
 
 
 def angle_display(values_rad):
@@ -83,7 +102,12 @@ def budget_lines(ds):
         meet = "" if r["meeting"] is None else f"{r['meeting']} of {r['values'].size}"
         if r["missing"]:
             meet += f" ({r['missing']} cases without a value)"
-        out.append(f"  {r['name']:<8} {r['median'] * factor:>17.4g} {r['max'] * factor:>10.4g}   {lo * factor:>11.4g} "
-                   f"{hi * factor:>10.4g}   {'>= ' + format(lo * factor, '.4g'):>9}   {req:>11}  {meet}".rstrip())
-    out += [f"  {line}" for line in WHY_NO_ENSEMBLE]
+        if "ensemble" in r:  # computed from the cases' series: exact
+            mix, ens = f"{r['mixed_exact'] * factor:>11.4g} {'(exact)':>10}", f"{r['ensemble'] * factor:>9.4g}"
+        else:
+            mix, ens = f"{lo * factor:>11.4g} {hi * factor:>10.4g}", f"{'>= ' + format(lo * factor, '.4g'):>9}"
+        out.append(f"  {r['name']:<8} {r['median'] * factor:>17.4g} {r['max'] * factor:>10.4g}   {mix}   {ens}   "
+                   f"{req:>11}  {meet}".rstrip())
+    if not all("ensemble" in r for r in rows):
+        out += [f"  {line}" for line in WHY_NO_ENSEMBLE]
     return out

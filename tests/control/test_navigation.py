@@ -345,6 +345,16 @@ stability_window = "10 s"
             want = index_value(name, t, one["knowledge_error"].values, 0.9973, 10.0)
             assert whole[name].values[k] == want
     assert not np.array_equal(whole["gyro_bias"].isel(case=0).values, whole["gyro_bias"].isel(case=1).values)
+    # the budget under the ensemble and mixed interpretations, exact from the cases' series
+    from orbatt.dataset.pointing_budget import budget_lines, pointing_budget
+    from orbatt.pointing import ensemble_quantile, index_series, mixed_quantile
+    t = np.arange(0.0, 61.0, 5.0)
+    series = np.stack([index_series("ake", t, whole["knowledge_error"].values[k]) for k in range(4)])
+    row = next(r for r in pointing_budget(whole) if r["name"] == "ake")
+    assert row["ensemble"] == ensemble_quantile(series, 0.9973)
+    assert row["mixed_exact"] == mixed_quantile(series, 0.9973)
+    assert row["mixed_exact"] <= row["ensemble"]
+    assert any("(exact)" in line and line.strip().startswith("ake") for line in budget_lines(whole))
 
 
 def test_scenario_keys_are_checked_where_they_enter(tmp_path):
