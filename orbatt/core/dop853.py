@@ -38,6 +38,12 @@ the same controller with ``err^(1/9)`` (:func:`controller9`). On the Keplerian b
 ~10 % more on the torque-free body (``benchmarks/verner98.py``). A binary's coupled orbit and
 attitudes (:mod:`orbatt.core.mutual`) run in the same loop (:data:`advance_coupled`, ``_verner98``).
 
+Dormand-Prince 5(4) (:data:`advance_dopri5`, :data:`advance_wide_dopri5`, their batch, group
+and lanes forms; coefficients: :mod:`orbatt.core.dopri5_coefficients`) runs in the same loop: 7
+stages, the seventh ``f(t + h, y_new)`` (FSAL inside the tableau: 6 evaluations per attempt),
+the error of Verner's form with ``E = b - bhat`` of order 4 and the controller with ``err^(1/5)``
+(Hairer's ``dopri5.f``). For the flight software's ticks (``benchmarks/tick_stepping.py``).
+
 Breakpoints: steps also land on the knots of the model's tables, a sampled orbit's samples and
 the environment tables (:func:`orbatt.core.model.next_breakpoint`), where the right-hand
 side's third derivative jumps; nothing is recorded there.
@@ -82,7 +88,9 @@ __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "ad
            "advance_wide_verner98", "advance_batch_verner98", "advance_batch_wide_verner98", "advance_coupled",
            "advance_coupled_verner98", "advance_group", "advance_group_wide", "advance_group_verner98",
            "advance_group_wide_verner98", "advance_lanes", "advance_lanes_wide", "advance_lanes_verner98",
-           "advance_lanes_wide_verner98", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE",
+           "advance_lanes_wide_verner98", "advance_dopri5", "advance_wide_dopri5", "advance_batch_dopri5",
+           "advance_batch_wide_dopri5", "advance_group_dopri5", "advance_group_wide_dopri5", "advance_lanes_dopri5",
+           "advance_lanes_wide_dopri5", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE",
            "PAUSED", "BUFFER_FULL", "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED",
            "FLAG_NONFINITE", "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SWITCH_T",
            "ST_SWITCH_K", "ST_SIZE", "EPS", "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS",
@@ -103,6 +111,10 @@ advance_verner98 = loop_of(NDIM, False, "verner98")
 #: :data:`advance_wide` with Verner's 9(8) pair (compiled on first use only)
 advance_wide_verner98 = loop_of(0, True, "verner98")
 #: the loops of a binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`), DOP853, Verner 9(8)
+#: the rigid body's and extended models' step loops with Dormand-Prince 5(4)
+#: (:mod:`orbatt.core.dopri5_coefficients`; compiled on first use only)
+advance_dopri5 = loop_of(NDIM, False, "dopri5")
+advance_wide_dopri5 = loop_of(0, True, "dopri5")
 advance_coupled = loop_of(0, False, coupled=True)
 advance_coupled_verner98 = loop_of(0, False, "verner98", coupled=True)
 
@@ -117,13 +129,18 @@ advance_group_wide = loop_of(0, True, lanes=True)
 #: :data:`advance_group` and :data:`advance_group_wide` with Verner's 9(8) pair
 advance_group_verner98 = loop_of(NDIM, False, "verner98", lanes=True)
 advance_group_wide_verner98 = loop_of(0, True, "verner98", lanes=True)
+#: :data:`advance_group` and :data:`advance_group_wide` with Dormand-Prince 5(4)
+advance_group_dopri5 = loop_of(NDIM, False, "dopri5", lanes=True)
+advance_group_wide_dopri5 = loop_of(0, True, "dopri5", lanes=True)
 
 
 def _batch_of(extended, tableau="dop853"):
     """The ensemble driver over members of :func:`advance` or (``extended``) :func:`advance_wide`,
-    or with ``tableau="verner98"`` of :func:`advance_verner98` or :func:`advance_wide_verner98`
-    (constants of the closure, as in :func:`orbatt.core.rk_loop.loop_of`)."""
+    or with ``tableau="verner98"`` of :func:`advance_verner98` or :func:`advance_wide_verner98`,
+    ``"dopri5"`` of :data:`advance_dopri5` or :data:`advance_wide_dopri5` (constants of the
+    closure, as in :func:`orbatt.core.rk_loop.loop_of`)."""
     verner = tableau == "verner98"
+    dopri5 = tableau == "dopri5"
 
     def advance_batch(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK,
                       rtol, atol, max_step, max_steps, budget):
@@ -154,6 +171,15 @@ def _batch_of(extended, tableau="dop853"):
                     status[e] = advance_verner98(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
                                                  inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
                                                  max_steps, budget)
+            elif dopri5:
+                if extended:
+                    status[e] = advance_wide_dopri5(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
+                                                    inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
+                                                    max_steps, budget)
+                else:
+                    status[e] = advance_dopri5(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
+                                               inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
+                                               max_steps, budget)
             elif extended:
                 status[e] = advance_wide(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all, inertia[e],
                                          terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
@@ -169,12 +195,17 @@ advance_batch_wide = _batch_of(True)
 #: :data:`advance_batch` and :data:`advance_batch_wide` with Verner's 9(8) pair
 advance_batch_verner98 = _batch_of(False, "verner98")
 advance_batch_wide_verner98 = _batch_of(True, "verner98")
+#: :data:`advance_batch` and :data:`advance_batch_wide` with Dormand-Prince 5(4)
+advance_batch_dopri5 = _batch_of(False, "dopri5")
+advance_batch_wide_dopri5 = _batch_of(True, "dopri5")
 
 
 def _lanes_of(extended, tableau="dop853"):
     """The ensemble driver over lockstep groups of :data:`advance_group` (``extended``:
-    :data:`advance_group_wide`; ``tableau="verner98"``: their Verner forms)."""
+    :data:`advance_group_wide`; ``tableau="verner98"``, ``"dopri5"``: their Verner, Dormand-Prince
+    5(4) forms)."""
     verner = tableau == "verner98"
+    dopri5 = tableau == "dopri5"
 
     def advance_lanes(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK, lanes, rtol, atol,
                       max_step, max_steps, budget):
@@ -195,6 +226,15 @@ def _lanes_of(extended, tableau="dop853"):
                     status[gi] = advance_group_verner98(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
                                                         record_all, inertia[a:b], terms, params, table, WORK[gi], rtol,
                                                         atol, max_step, max_steps, budget)
+            elif dopri5:
+                if extended:
+                    status[gi] = advance_group_wide_dopri5(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
+                                                           record_all, inertia[a:b], terms, params, table, WORK[gi],
+                                                           rtol, atol, max_step, max_steps, budget)
+                else:
+                    status[gi] = advance_group_dopri5(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
+                                                      record_all, inertia[a:b], terms, params, table, WORK[gi], rtol,
+                                                      atol, max_step, max_steps, budget)
             elif extended:
                 status[gi] = advance_group_wide(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b], record_all,
                                                 inertia[a:b], terms, params, table, WORK[gi], rtol, atol, max_step,
@@ -213,3 +253,6 @@ advance_lanes_wide = _lanes_of(True)
 #: :data:`advance_lanes` and :data:`advance_lanes_wide` with Verner's 9(8) pair
 advance_lanes_verner98 = _lanes_of(False, "verner98")
 advance_lanes_wide_verner98 = _lanes_of(True, "verner98")
+#: :data:`advance_lanes` and :data:`advance_lanes_wide` with Dormand-Prince 5(4)
+advance_lanes_dopri5 = _lanes_of(False, "dopri5")
+advance_lanes_wide_dopri5 = _lanes_of(True, "dopri5")

@@ -1,8 +1,8 @@
 """The one adaptive Runge-Kutta step loop, written once and instantiated (:func:`loop_of`) for one
 trajectory and for a group of ensemble members in lockstep ("lanes"), for each Runge-Kutta pair
-of :data:`orbatt.core.step_control.TABLEAUS` (DOP853, Verner 9(8)), for the rigid body and for
-extended models (reaction wheels, control laws: :mod:`orbatt.core.gyrostat`), and for a
-binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`, one trajectory).
+of :data:`orbatt.core.step_control.TABLEAUS` (DOP853, Verner 9(8), Dormand-Prince 5(4)), for the
+rigid body and for extended models (reaction wheels, control laws: :mod:`orbatt.core.gyrostat`),
+and for a binary's coupled orbit and attitudes (:mod:`orbatt.core.mutual`, one trajectory).
 
 The loop keeps its working copies in structure-of-arrays layout, lane index last: the state
 ``yg (n, nl)``, the stages ``K (stages + 1, n, nl)``. One trajectory is the group of one lane
@@ -46,9 +46,9 @@ from .model import next_breakpoint
 from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
 from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES, ST_FACOLD, ST_H, ST_HMIN,
-                           ST_SWITCH_K, ST_SWITCH_T, ST_T, TABLEAUS, accept_step, all_finite, begin_attempt, controller,
-                           controller9, error_norm, hinit_der2, hinit_guess, hinit_norms, hinit_refine, momentum_scale,
-                           reject_nonfinite, reject_step)
+                           ST_SWITCH_K, ST_SWITCH_T, ST_T, PAIRS, TABLEAUS, accept_step, all_finite, begin_attempt,
+                           controller, controller9, controller_pow, error_norm, hinit_der2, hinit_guess, hinit_norms,
+                           hinit_refine, hinit_refine_order, momentum_scale, reject_nonfinite, reject_step)
 from .switches import AT_START, crossed, locate, switch_count, switch_values, update
 
 __all__ = ["loop_of", "stage_input"]
@@ -90,8 +90,15 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
     arrays), on the rigid body's right-hand side or (``extended``) the gyrostat's, or
     (``coupled``, one trajectory only) a binary's, with the Runge-Kutta pair ``tableau`` (a key
     of :data:`~orbatt.core.step_control.TABLEAUS`: ``"dop853"``, Hairer's error norm and the
-    controller's exponent 1/8, or ``"verner98"``: ``err = |h| rms((E . K) / sk)`` and 1/9),
-    for one trajectory or (``lanes``) a lockstep group.
+    controller's exponent 1/8, ``"verner98"``: ``err = |h| rms((E . K) / sk)`` and 1/9, or
+    ``"dopri5"``: the same norm and 1/5, its seventh stage ``f(t + h, y_new)`` taken as the next
+    step's first: :data:`~orbatt.core.step_control.PAIRS`), for one trajectory or (``lanes``) a
+    lockstep group.
+
+    A step that lands on a flight-software tick (extended models) and locates no switch skips
+    the derivative at its end under the old command (``"dop853"``, ``"verner98"``): the tick
+    changes the command held in the state, and the loop evaluates the derivative once, after
+    it (``"dopri5"`` has that derivative already: its error estimate needs it).
 
     All five are constants of the closure: numba prunes the branches not taken, so the rigid
     body's loop does not compile the extended right-hand side, and they keep the on-disk cache
@@ -100,7 +107,11 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
     which LLVM unrolls. ``coupled``: :func:`orbatt.core.mutual.rhs_coupled`, ``inertia`` its
     constants ``c`` (absolute tolerances ``atol * c[C_ATOL + i]``)."""
     N_STAGES, A_PTR, A_COL, A_VAL, C, B, E5, E3 = TABLEAUS[tableau]
-    VERNER = tableau == "verner98"
+    CTRL_K, HINIT_ORDER, LAST_NEW = PAIRS[tableau]
+    #: one error estimate, ``err = |h| rms((E . K) / sk)`` (Verner's 9(8), Dormand-Prince 5(4))
+    VERNER = tableau != "dop853"
+    CTRL9 = tableau == "verner98"
+    CTRL_EXPO = 1.0 / CTRL_K
     WIDTH = width
     EXTENDED = extended
     COUPLED = coupled
@@ -256,7 +267,10 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     else:
                         dnf, _ = hinit_norms(yg[:, l], K[0, :, l], atol, aQ[l], rtol)
                         der2 = hinit_der2(yg[:, l], K[0, :, l], K[1, :, l], atol, aQ[l], rtol)
-                    hl = min(100.0 * abs(h0), hinit_refine(der2, dnf, h0), hmax)
+                    if HINIT_ORDER == 8:
+                        hl = min(100.0 * abs(h0), hinit_refine(der2, dnf, h0), hmax)
+                    else:
+                        hl = min(100.0 * abs(h0), hinit_refine_order(der2, dnf, h0, HINIT_ORDER), hmax)
                     h = hl if l == 0 else min(h, hl)
             cnt[CNT_NFEV] += 1
             if not (h > 0.0 and h < np.inf):
@@ -300,20 +314,25 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             if status != DONE:
                 break
             sw_land = landing and t_next == t_sw  # this attempt ends on the located switch
+            t_new = t_next if landing else t + hh
             # --- the stages
             for s in range(1, N_STAGES):
                 stage_input(ytmp, yg, K, s, hh, A_PTR, A_COL, A_VAL, ncomp, nl)
+                ts = t + C[s] * hh
+                if LAST_NEW:  # (a constant: pruned from the other pairs' loops)
+                    if s == N_STAGES - 1:  # f(t_new, y_new): at the step's end time itself
+                        ts = t_new
                 if LANES:
                     if EXTENDED:
-                        rhs_extended_lanes(t + C[s] * hh, ytmp, nl, I, terms, params, table, work, K[s])
+                        rhs_extended_lanes(ts, ytmp, nl, I, terms, params, table, work, K[s])
                     else:
-                        rhs_lanes(t + C[s] * hh, ytmp, nl, I, terms, params, table, work, G, K[s])
+                        rhs_lanes(ts, ytmp, nl, I, terms, params, table, work, G, K[s])
                 elif COUPLED:
-                    rhs_coupled(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
+                    rhs_coupled(ts, ytmp1, inertia, terms, params, table, work, K1[s])
                 elif EXTENDED:
-                    rhs_extended(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
+                    rhs_extended(ts, ytmp1, inertia, terms, params, table, work, K1[s])
                 else:
-                    rhs_inline(t + C[s] * hh, ytmp1, inertia, terms, params, table, work, K1[s])
+                    rhs_inline(ts, ytmp1, inertia, terms, params, table, work, K1[s])
             cnt[CNT_NFEV] += N_STAGES - 1
             # --- the solution and each member's error estimate (lanes innermost: vectorized)
             for l in range(nl):
@@ -356,11 +375,12 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             if not (err < np.inf):  # NaN or inf: shrink hard and retry
                 flags, h, reject = reject_nonfinite(cnt, flags, hh)
                 continue
-            if VERNER:
+            if CTRL9:
                 fac11, hnew = controller9(err, facold, hh)
+            elif VERNER:
+                fac11, hnew = controller_pow(err, facold, hh, CTRL_EXPO)
             else:
                 fac11, hnew = controller(err, facold, hh)
-            t_new = t_next if landing else t + hh
             sw_cross = False
             if SWITCHES:  # (a constant: `if` alone, so that numba prunes it from the other loops)
                 if nsw > 0 and not sw_land:  # an armed switching function changed sign?
@@ -368,25 +388,35 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     sw_cross = crossed(work, gnew, nsw)
             if err <= 1.0 or sw_cross:
                 # accepted (or to be located): the derivative at the new point (FSAL; Verner's
-                # first stage)
-                if LANES:
-                    if EXTENDED:
-                        rhs_extended_lanes(t_new, ynew, nl, I, terms, params, table, work, K[N_STAGES])
+                # first stage; Dormand-Prince 5(4)'s last stage); none before a tick, which
+                # changes the command (the derivative after it is evaluated below)
+                at_tick = False
+                if EXTENDED:
+                    at_tick = t_new == t_tick and not sw_cross
+                if LAST_NEW:
+                    for i in range(ncomp):
+                        for l in range(nl):
+                            K[N_STAGES, i, l] = K[N_STAGES - 1, i, l]
+                elif not at_tick:
+                    if LANES:
+                        if EXTENDED:
+                            rhs_extended_lanes(t_new, ynew, nl, I, terms, params, table, work, K[N_STAGES])
+                        else:
+                            rhs_lanes(t_new, ynew, nl, I, terms, params, table, work, G, K[N_STAGES])
+                    elif COUPLED:
+                        rhs_coupled(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
+                    elif EXTENDED:
+                        rhs_extended(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
                     else:
-                        rhs_lanes(t_new, ynew, nl, I, terms, params, table, work, G, K[N_STAGES])
-                elif COUPLED:
-                    rhs_coupled(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
-                elif EXTENDED:
-                    rhs_extended(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
-                else:
-                    rhs(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
-                cnt[CNT_NFEV] += 1
+                        rhs(t_new, ynew1, inertia, terms, params, table, work, K1[N_STAGES])
+                    cnt[CNT_NFEV] += 1
                 finite = True
-                for l in range(nl):
-                    if not all_finite(K[N_STAGES, :, l], ncomp):
-                        finite = False
-                        bad_lane = l
-                        break
+                if LAST_NEW or not at_tick:
+                    for l in range(nl):
+                        if not all_finite(K[N_STAGES, :, l], ncomp):
+                            finite = False
+                            bad_lane = l
+                            break
                 if not finite:
                     flags, h, reject = reject_nonfinite(cnt, flags, hh)
                     continue

@@ -15,12 +15,14 @@ import numpy as np
 
 from ._jit import (DONE, FLAG_NONFINITE, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, jit_inline)
 from . import dop853_coefficients as _dp
+from . import dopri5_coefficients as _d5
 from . import verner98_coefficients as _vn
 from .dop853_coefficients import ORDER
 
-__all__ = ["new_state", "momentum_scale", "hinit_guess", "hinit_refine", "error_norm", "plan_step", "controller",
-           "controller9", "pi_step", "next_after_accept", "next_after_reject", "reject_nonfinite", "reject_step",
-           "accept_step", "hinit_norms", "hinit_der2", "all_finite", "failure", "begin_attempt", "TABLEAUS",
+__all__ = ["new_state", "momentum_scale", "hinit_guess", "hinit_refine", "hinit_refine_order", "error_norm",
+           "plan_step", "controller", "controller9", "controller_pow", "pi_step", "next_after_accept",
+           "next_after_reject", "reject_nonfinite", "reject_step", "accept_step", "hinit_norms", "hinit_der2",
+           "all_finite", "failure", "begin_attempt", "TABLEAUS", "PAIRS",
            "SAFETY", "FAC_MIN", "FAC_MAX", "BETA", "LAND_MARGIN", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SWITCH_T",
            "ST_SWITCH_K", "ST_SIZE", "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS",
            "CNT_SWITCHES", "CNT_SIZE"]
@@ -90,6 +92,16 @@ def hinit_refine(der2, dnf, h0):
 
 
 @jit_inline
+def hinit_refine_order(der2, dnf, h0, order):
+    """:func:`hinit_refine` for a pair of order ``order`` (Hairer's ``iord``): ``(0.01 /
+    der12)^(1/order)``."""
+    der12 = max(math.sqrt(der2) / h0, math.sqrt(dnf))
+    if der12 <= 1e-15:
+        return max(1.0e-6, h0 * 1.0e-3)
+    return (0.01 / der12) ** (1.0 / order)
+
+
+@jit_inline
 def error_norm(e5, e3, hh, n):
     """Hairer's error of a step of size ``hh`` from the sums of squares ``e5``, ``e3`` over
     ``n`` components."""
@@ -121,6 +133,13 @@ def controller9(err, facold, hh):
     """:func:`controller` for a pair whose embedded solution has order 8 (Verner's 9(8)):
     ``(fac11, hnew)`` with ``fac11 = err^(1/9)``."""
     return pi_step(err ** (1.0 / 9.0), facold, hh)
+
+
+@jit_inline
+def controller_pow(err, facold, hh, expo):
+    """:func:`controller` for a pair whose controller exponent is ``expo`` (1 / (the embedded
+    order + 1); Dormand-Prince 5(4): 1/5): ``(fac11, hnew)`` with ``fac11 = err^expo``."""
+    return pi_step(err ** expo, facold, hh)
 
 
 @jit_inline
@@ -242,6 +261,14 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out
 
 
 #: the Runge-Kutta pairs the step loop runs: ``(N_STAGES, A_PTR, A_COL, A_VAL, C, B, E_HI,
-#: E_LO)``; DOP853's error norm takes both estimates, Verner's 9(8) pair one (``E_LO`` unused)
+#: E_LO)``; DOP853's error norm takes both estimates, Verner's 9(8) pair and Dormand-Prince 5(4)
+#: one (``E_LO`` unused)
 TABLEAUS = {"dop853": (_dp.N_STAGES, _dp.A_PTR, _dp.A_COL, _dp.A_VAL, _dp.C, _dp.B, _dp.E5, _dp.E3),
-            "verner98": (_vn.N_STAGES, _vn.A_PTR, _vn.A_COL, _vn.A_VAL, _vn.C, _vn.B, _vn.E, _vn.E)}
+            "verner98": (_vn.N_STAGES, _vn.A_PTR, _vn.A_COL, _vn.A_VAL, _vn.C, _vn.B, _vn.E, _vn.E),
+            "dopri5": (_d5.N_STAGES, _d5.A_PTR, _d5.A_COL, _d5.A_VAL, _d5.C, _d5.B, _d5.E, _d5.E)}
+#: how the step loop controls each pair: ``(k, order, last_new)``: the controller's exponent
+#: ``1/k`` (the error estimate's order + 1), the order of Hairer's initial step, and whether the
+#: tableau's last stage is ``f(t + h, y_new)`` (FSAL inside the tableau: Dormand-Prince 5(4);
+#: the others evaluate the next step's first stage on acceptance)
+PAIRS = {"dop853": (8, _dp.ORDER, False), "verner98": (9, _dp.ORDER, False),
+         "dopri5": (5, _d5.ORDER, _d5.LAST_STAGE_IS_NEW)}

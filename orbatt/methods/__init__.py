@@ -20,6 +20,11 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
     ``"dop853"`` (also wheels and control laws; ensembles member by member, bitwise as alone). On the
     Keplerian benchmark at 1e-9 rad ~15-20 % less time than ``"dop853"``, ~10 % at 1e-6 rad;
     ~10 % slower on the torque-free body (``benchmarks/verner98.py``).
+``"dopri5"`` (:mod:`.dop853`)
+    Dormand-Prince 5(4) (7 stages, FSAL) in the same compiled loop and options as ``"dop853"``.
+    For flight software at a dense period (``[control] period``), where one step per tick meets
+    the tolerance anyway: about half the right-hand-side evaluations of ``"dop853"`` there
+    (``benchmarks/tick_stepping.py``); elsewhere ``"dop853"`` is the faster at tight tolerances.
 ``"dop853-lanes"`` (:mod:`.dop853`)
     For ensembles: DOP853 on groups of ``lanes`` members (default 32) that share the step
     size (controlled by the group's largest error) and the orbit evaluation, with the
@@ -27,8 +32,8 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
     each member is at least as accurate as alone, but results are not bitwise those of
     one-by-one runs. Rigid bodies and extended models (wheels, control laws): the same compiled
     step loop as ``"dop853"`` (:mod:`orbatt.core.rk_loop`), instantiated for a group of lanes.
-``"vern98-lanes"`` (:mod:`.dop853`)
-    ``"dop853-lanes"`` with Verner's 9(8) pair.
+``"vern98-lanes"``, ``"dopri5-lanes"`` (:mod:`.dop853`)
+    ``"dop853-lanes"`` with Verner's 9(8) pair, with Dormand-Prince 5(4).
 ``"splitting2"``, ``"splitting4"``, ``"splitting6"`` (and named variants; :mod:`.fixed_step`)
     Symplectic splitting (:mod:`orbatt.core.splitting`), fixed ``step``: Strang (order 2),
     McLachlan's 5-stage composition (order 4; ``"splitting4-yoshida"``,
@@ -55,11 +60,12 @@ Writing a method: see :class:`Method` (the subclass contract) and :func:`registe
 from __future__ import annotations
 
 from .base import METHODS, Method, methods, register, resolve_method
-from .dop853 import DOP853, DOP853Lanes, Vern98, Vern98Lanes
+from .dop853 import DOP853, DOP853Lanes, Dopri5, Dopri5Lanes, Vern98, Vern98Lanes
 from .exact import Exact
 from .fixed_step import RK4, FixedStep, Splitting
 from .problem import KernelSpec, Problem
 from .scipy_ivp import Scipy
 
 __all__ = ["Method", "METHODS", "methods", "register", "resolve_method", "Problem", "KernelSpec", "DOP853",
-           "DOP853Lanes", "Vern98", "Vern98Lanes", "Exact", "FixedStep", "RK4", "Splitting", "Scipy"]
+           "DOP853Lanes", "Vern98", "Vern98Lanes", "Dopri5", "Dopri5Lanes", "Exact", "FixedStep", "RK4", "Splitting",
+           "Scipy"]

@@ -1,7 +1,7 @@
-"""Drivers of the compiled DOP853 and Verner 9(8) kernels (:mod:`orbatt.core.dop853`, the one
-step loop of :mod:`orbatt.core.rk_loop`): ``"dop853"``, ``"vern98"`` (one member, or an ensemble
-stepped member by member in parallel) and ``"dop853-lanes"``, ``"vern98-lanes"`` (an ensemble in
-lockstep groups)."""
+"""Drivers of the compiled DOP853, Verner 9(8) and Dormand-Prince 5(4) kernels
+(:mod:`orbatt.core.dop853`, the one step loop of :mod:`orbatt.core.rk_loop`): ``"dop853"``,
+``"vern98"``, ``"dopri5"`` (one member, or an ensemble stepped member by member in parallel) and
+``"dop853-lanes"``, ``"vern98-lanes"``, ``"dopri5-lanes"`` (an ensemble in lockstep groups)."""
 from __future__ import annotations
 
 import math
@@ -20,8 +20,8 @@ from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
 from .problem import KernelSpec
 
-__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes", "LockstepSwitchWarning", "tick_grid", "with_phase",
-           "resume_stepper"]
+__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes", "Dopri5", "Dopri5Lanes", "LockstepSwitchWarning",
+           "tick_grid", "with_phase", "resume_stepper"]
 
 #: counters summed into the statistics
 _COUNTS = {"steps": kd.CNT_STEPS, "rejected_steps": kd.CNT_REJECTED, "rhs_evaluations": kd.CNT_NFEV,
@@ -309,6 +309,21 @@ class Vern98(DOP853):
              True: (kd.advance_wide_verner98, kd.advance_batch_wide_verner98)}
 
 
+@register
+class Dopri5(DOP853):
+    """Dormand-Prince 5(4) (7 stages, FSAL inside the tableau: :mod:`orbatt.core.dopri5_coefficients`)
+    in the compiled step loop of :class:`DOP853` (controller exponent 1/5; error ``|h| rms((b -
+    bhat) . K / sk)``); lands on every output time. For flight software at a dense period,
+    where one step per tick meets the tolerance: half DOP853's evaluations per tick
+    (``benchmarks/tick_stepping.py``)."""
+
+    name = "dopri5"
+    order = 5
+    description = "compiled adaptive Dormand-Prince 5(4) (7 stages, FSAL), Hairer-style PI step-size control"
+    loops = {False: (kd.advance_dopri5, kd.advance_batch_dopri5),
+             True: (kd.advance_wide_dopri5, kd.advance_batch_wide_dopri5)}
+
+
 class LockstepSwitchWarning(UserWarning):
     """A lockstep-lanes method on an ensemble whose model has switching functions
     (:mod:`orbatt.core.switches`): slower than independent members there, and not bitwise."""
@@ -419,6 +434,21 @@ class Vern98Lanes(DOP853Lanes):
     loops = Vern98.loops
     group_loops = {False: (kd.advance_group_verner98, kd.advance_lanes_verner98),
                    True: (kd.advance_group_wide_verner98, kd.advance_lanes_wide_verner98)}
+
+
+@register
+class Dopri5Lanes(DOP853Lanes):
+    """Dormand-Prince 5(4) over an ensemble in lockstep groups (the one step loop of
+    :class:`DOP853Lanes` with the pair of :class:`Dopri5`)."""
+
+    name = "dopri5-lanes"
+    order = 5
+    description = ("compiled Dormand-Prince 5(4) for ensembles: groups of members share the step size and the "
+                   "orbit evaluation, vectorized over members (results agree with one-by-one runs to the "
+                   "tolerance, not bitwise)")
+    loops = Dopri5.loops
+    group_loops = {False: (kd.advance_group_dopri5, kd.advance_lanes_dopri5),
+                   True: (kd.advance_group_wide_dopri5, kd.advance_lanes_wide_dopri5)}
 
 
 #: the values of the option ``independent_variable``

@@ -16,6 +16,8 @@ FREE_SETTINGS = {
     "dop853-lanes": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "vern98": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "vern98-lanes": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
+    "dopri5": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
+    "dopri5-lanes": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "scipy-DOP853": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "scipy-RK45": ({"rtol": 1e-9, "atol": 1e-11}, 1e-7),
     "scipy-RK23": ({"rtol": 1e-8, "atol": 1e-10}, 1e-5),
