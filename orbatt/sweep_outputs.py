@@ -114,8 +114,8 @@ NEEDS = {
     "control": (lambda control, wheels: control is not None, "a [control] law"),
     "dipole": (lambda control, wheels: control is not None and law_of(control).writes("dipole_control"),
                f"a [control] law with magnetorquers ({_dipole_laws()})"),
-    "target": (lambda control, wheels: control is not None and law_of(control).holds_frame(control),
-               "a [control] law holding a target (law = 'pd', target = 'orbital' or 'inertial')"),
+    "target": (lambda control, wheels: control is not None and law_of(control).name == "pd",
+               "a [control] law with a target (law = 'pd')"),
     "modes": (lambda control, wheels: control is not None and law_of(control) is MODE_SEQUENCE,
               "a mode sequence ([[control.modes]])"),
     # (the scenario parser marks the law's settings it hands the [sweep] table with the estimator)
@@ -469,16 +469,6 @@ def _window_text(spec, units):
         f"over the last {spec.window:g} {units['time']} of the run"
 
 
-def _not_sun(output):
-    def refuse(control):
-        law = law_of(control)
-        if law is not None and "sun" in law.fields(control):
-            return (f"{output!r} of a Sun-pointing law is not available yet; use pointing_axis / pointing_reference "
-                    "without the law, or remove it")
-        return None
-    return refuse
-
-
 def pointing_index(name, meaning, series, needs=(), keys=("pointing_axis", "pointing_reference")):
     """The :class:`SweepOutput` of the ECSS pointing index ``name`` (a key of
     :data:`orbatt.pointing.INDEX_KINDS`: ``ape``, ``rpe``, ``mpe``, and ``ake``, ``rke``, ``mke``
@@ -528,8 +518,7 @@ OUTPUTS = {o.key: o for o in (
                                                            "settling_angle (NaN: never)",
                            lambda spec: dict(settling_angle_rad=spec.settling_angle, located=_LOCATED)),),
                 keys=("settling_angle", "pointing_axis", "pointing_reference"),
-                compute=lambda c: {"settling_time": _settling(c)},
-                refuse=_not_sun("settling_time")),
+                compute=lambda c: {"settling_time": _settling(c)}),
     SweepOutput("pointing_error", "largest and root mean square pointing error over window",
                 (OutputVar("pointing_error_max", (), "angle",
                            lambda spec, units: f"largest pointing error {_window_text(spec, units)}"),

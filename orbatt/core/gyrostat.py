@@ -295,6 +295,27 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
     return omega, h, tau, m, u
 
 
+@jit
+def law_errors(t, q, terms, params, table, work):
+    """The attitude error angle (rad, ``(N,)``) of the model's first PD law at the times ``t
+    (N,)`` for the true attitudes ``q (N, 4)``: ``2 asin |e|`` of the law's own error
+    (:func:`orbatt.core.control.pd_error`: any target, orbital, inertial, Sun, ground or nadir,
+    with its table); NaN without a PD law."""
+    N = t.shape[0]
+    out = np.full(N, np.nan)
+    for j in range(1, terms.shape[0]):
+        if terms[j, KIND] != PD_CONTROL:
+            continue
+        p0 = terms[j, P0]
+        for i in range(N):
+            r, xhat, v = orbit_radial(t[i], terms, params, table, work)
+            aux, aux_rate = pd_row_target(j, t[i], terms, params, table, work)
+            e, _ = ctl.pd_error((q[i, 0], q[i, 1], q[i, 2], q[i, 3]), params, p0, r, xhat, v, aux, aux_rate)
+            out[i] = 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
+        break
+    return out
+
+
 # ---------------------------------------------------------------------------------------
 # The flight software's ticks (issue 32): laws evaluated at t_k = phase + k period, held
 

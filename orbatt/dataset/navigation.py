@@ -130,4 +130,7 @@ def navigation_variables(model, q, z, t, tdims, nwheels, navigation):
                                                "the last tick")
         data["bias_estimate"] = _var(vv, _slot(z, col, "b_hat"), "rad s-1", "the filter's estimate of the gyro bias",
                                      frame="B")
+    key = f"seed {navigation.seed}, case {navigation.case}"  # the noise's key (orbatt.core.noise)
+    for v in data.values():
+        v.attrs["noise_key"] = key
     return data

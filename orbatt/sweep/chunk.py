@@ -23,6 +23,8 @@ from .. import quaternion as qt
 from ..core import kernel_floats
 from ..core import evaluation as kev
 from ..core import potentials as kp
+from ..core import gyrostat as kg
+from ..methods.problem import kernel_spec
 from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
@@ -399,7 +401,14 @@ def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, 
         p = orbit.orbital_quaternion(sc.times)
     W = None if tr is None else tr.extended  # the wheels' momenta, then the held commands
 
+    # a PD law pointing an axis (Sun, ground target) or holding the geodetic nadir: its own error,
+    # as the kernel computes it along the run's orbit and tables
+    by_law = (control is not None and not by_target and getattr(control, "law", None) == "pd")
+    model = kernel_spec(potential, [bodies[0]]) if by_law else None
+
     def pointing(t, qq):
+        if by_law:
+            return kg.law_errors(kernel_floats(t), np.ascontiguousarray(qq), *model, kp.new_work())
         pp = None if p is None else (p if t is sc.times else orbit.orbital_quaternion(t))
         if by_target:
             return target_pointing_error(control, qq, pp)
