@@ -172,8 +172,10 @@ def _mm(A, B):
 
 @jit
 def covariance_step(P, w, dt, sv, su):
-    """``P <- Phi P Phi^T + Qd`` in place (``P (6, 6)``; module docstring) for the estimated rate
-    ``w`` (rad/s) held over ``dt`` (s) and the gyro's densities ``sv``, ``su``."""
+    """``P <- Phi P Phi^T + Qd`` in place (``P``: the covariance, 36 floats row-major, a view
+    into the state; module docstring) for the estimated rate ``w`` (rad/s) held over ``dt`` (s)
+    and the gyro's densities ``sv``, ``su``. ``Phi = [[A, B], [0, I]]`` is formed in closed form and
+    the products are written out on its blocks (two scratch arrays; no BLAS)."""
     n = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     x = n * dt
     if x > 1e-4:
@@ -184,29 +186,40 @@ def covariance_step(P, w, dt, sv, su):
         a = dt * (1.0 - x * x / 6.0)
         b = dt * dt * (0.5 - x * x / 24.0)
         c = dt * dt * dt * (1.0 / 6.0 - x * x / 120.0)
-    W = np.zeros((3, 3))
-    W[0, 1], W[0, 2], W[1, 2] = -w[2], w[1], -w[0]
-    W[1, 0], W[2, 0], W[2, 1] = w[2], -w[1], w[0]
-    W2 = _mm(W, W)
-    Phi = np.zeros((6, 6))
+    # W = [w x], W2 = W W = w w^T - |w|^2 I
+    W = ((0.0, -w[2], w[1]), (w[2], 0.0, -w[0]), (-w[1], w[0], 0.0))
+    n2 = n * n
+    Phi = np.zeros(36)  # row-major 6 x 6
     for i in range(3):
         for k in range(3):
             eye = 1.0 if i == k else 0.0
-            Phi[i, k] = eye - a * W[i, k] + b * W2[i, k]
-            Phi[i, 3 + k] = b * W[i, k] - dt * eye - c * W2[i, k]
-        Phi[3 + i, 3 + i] = 1.0
-    out = _mm(_mm(Phi, P), Phi.T.copy())
+            w2 = w[i] * w[k] - n2 * eye
+            Phi[6 * i + k] = eye - a * W[i][k] + b * w2
+            Phi[6 * i + 3 + k] = b * W[i][k] - dt * eye - c * w2
+        Phi[6 * (3 + i) + 3 + i] = 1.0
+    M = np.empty(36)  # Phi P
+    for i in range(6):
+        for k in range(6):
+            acc = 0.0
+            for j in range(6):
+                acc += Phi[6 * i + j] * P[6 * j + k]
+            M[6 * i + k] = acc
+    for i in range(6):  # (Phi P) Phi^T, the lower triangle
+        for k in range(i + 1):
+            acc = 0.0
+            for j in range(6):
+                acc += M[6 * i + j] * Phi[6 * k + j]
+            P[6 * i + k] = acc
     q11 = sv * sv * dt + su * su * dt * dt * dt / 3.0
     q12 = -0.5 * su * su * dt * dt
     q22 = su * su * dt
     for i in range(3):
-        out[i, i] += q11
-        out[i, 3 + i] += q12
-        out[3 + i, i] += q12
-        out[3 + i, 3 + i] += q22
-    for i in range(6):
-        for k in range(6):
-            P[i, k] = 0.5 * (out[i, k] + out[k, i])
+        P[6 * i + i] += q11
+        P[6 * (3 + i) + i] += q12
+        P[6 * (3 + i) + 3 + i] += q22
+    for i in range(6):  # symmetric by construction
+        for k in range(i):
+            P[6 * k + i] = P[6 * i + k]
 
 
 @jit
@@ -313,9 +326,7 @@ def navigation_tick(t, y, q, omega, r, xhat, sun, params, p0, start):
                 qh = propagate_estimate((y[z + _ZQ], y[z + _ZQ + 1], y[z + _ZQ + 2], y[z + _ZQ + 3]), w_hat, h)
                 for i in range(4):
                     y[z + _ZQ + i] = qh[i]
-                P = y[z + _ZP:z + _ZP + 36].copy().reshape(6, 6)
-                covariance_step(P, w_hat, h, sv, su)
-                y[z + _ZP:z + _ZP + 36] = P.ravel()
+                covariance_step(y[z + _ZP:z + _ZP + 36], w_hat, h, sv, su)
             for i in range(3):
                 old = y[z + _ZBETA + i]
                 new = old + nu * noise.normal(seed, case, noise.GYRO_BIAS, k, i)
