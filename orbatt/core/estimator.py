@@ -51,7 +51,8 @@ from .qalg import qconj, qmul, rotate_inv
 from .slots import Slots
 
 __all__ = ["NAV", "STATE", "NZ", "VEC", "MAGNETOMETER", "SUN_SENSOR", "nav_params", "vector_params",
-           "propagate_estimate", "covariance_step", "attitude_update", "vector_update", "navigation_tick",
+           "propagate_estimate", "covariance_step", "kalman_update", "attitude_update", "vector_update",
+           "navigation_tick",
            "vector_tick", "estimate_feedback"]
 
 #: the parameter layout of a navigation row (module docstring): the flight-software slots, the
@@ -223,17 +224,15 @@ def covariance_step(P, w, dt, sv, su):
 
 
 @jit
-def attitude_update(q, b, P, q_meas, sigma):
-    """The MEKF's update with an attitude measurement ``q_meas`` (body -> S) of 1-sigma
-    ``sigma (3)`` (rad, body axes): ``(q, b)`` updated and returned, ``P (6, 6)`` in place
-    (Joseph form; module docstring)."""
-    d = qmul(qconj(q), q_meas)
-    sg = 2.0 if d[0] >= 0.0 else -2.0
-    res = np.array([sg * d[1], sg * d[2], sg * d[3]])
-    S = P[:3, :3].copy()
+def kalman_update(q, b, P, H, res, var):
+    """The MEKF's update with three measurements: ``H (3, 6)``, the residual ``res (3)`` and
+    their noise variances ``var (3)`` (``R = diag(var)``): ``(q, b)`` reset multiplicatively and
+    returned, ``P (6, 6)`` in place (the Joseph form; ``S^-1`` by cofactors: no BLAS or LAPACK,
+    the same bits on any CPU)."""
+    PHt = _mm(P, H.T.copy())
+    S = _mm(H, PHt)
     for i in range(3):
-        S[i, i] += sigma[i] * sigma[i]
-    # S^-1 by cofactors (S symmetric positive definite; no LAPACK: the same bits on any CPU)
+        S[i, i] += var[i]
     c00 = S[1, 1] * S[2, 2] - S[1, 2] * S[2, 1]
     c01 = S[0, 2] * S[2, 1] - S[0, 1] * S[2, 2]
     c02 = S[0, 1] * S[1, 2] - S[0, 2] * S[1, 1]
@@ -245,21 +244,35 @@ def attitude_update(q, b, P, q_meas, sigma):
     Si[0, 0], Si[0, 1], Si[0, 2] = c00 / det, c01 / det, c02 / det
     Si[1, 0], Si[1, 1], Si[1, 2] = c01 / det, c11 / det, c12 / det
     Si[2, 0], Si[2, 1], Si[2, 2] = c02 / det, c12 / det, c22 / det
-    K = _mm(P[:, :3].copy(), Si)
+    K = _mm(PHt, Si)
     dx = np.zeros(6)
     for i in range(6):
         dx[i] = K[i, 0] * res[0] + K[i, 1] * res[1] + K[i, 2] * res[2]
-    IKH = np.eye(6)
-    IKH[:, :3] -= K
-    R = np.zeros((3, 3))
-    for i in range(3):
-        R[i, i] = sigma[i] * sigma[i]
-    new = _mm(_mm(IKH, P), IKH.T.copy()) + _mm(_mm(K, R), K.T.copy())
+    IKH = np.eye(6) - _mm(K, H)
+    KR = K.copy()
+    for i in range(6):
+        for k in range(3):
+            KR[i, k] *= var[k]
+    new = _mm(_mm(IKH, P), IKH.T.copy()) + _mm(KR, K.T.copy())
     for i in range(6):
         for k in range(6):
             P[i, k] = 0.5 * (new[i, k] + new[k, i])
     qn = _normalized(qmul(q, _small_rotation((dx[0], dx[1], dx[2]))))
     return qn, (b[0] + dx[3], b[1] + dx[4], b[2] + dx[5])
+
+
+@jit
+def attitude_update(q, b, P, q_meas, sigma):
+    """The MEKF's update with an attitude measurement ``q_meas`` (body -> S) of 1-sigma
+    ``sigma (3)`` (rad, body axes): ``H = [I 0]``, the residual ``2 sgn(d0) Im(d)``, ``d = q~
+    q_meas`` (:func:`kalman_update`)."""
+    d = qmul(qconj(q), q_meas)
+    sg = 2.0 if d[0] >= 0.0 else -2.0
+    H = np.zeros((3, 6))
+    for i in range(3):
+        H[i, i] = 1.0
+    return kalman_update(q, b, P, H, (sg * d[1], sg * d[2], sg * d[3]),
+                         (sigma[0] * sigma[0], sigma[1] * sigma[1], sigma[2] * sigma[2]))
 
 
 @jit_inline
@@ -392,41 +405,12 @@ def estimate_feedback(y, params, p0, q, omega):
 def vector_update(q, b, P, pred, meas, sigma):
     """The MEKF's update with a vector measurement ``meas`` (body axes) of the predicted
     ``pred`` (the reference vector in the estimated body axes), 1-sigma ``sigma`` per axis:
-    ``H = [[pred x] 0]`` (``b_true = pred + pred x dtheta``), ``(q, b)`` returned, ``P`` in place
-    (Joseph form)."""
+    ``H = [[pred x] 0]`` (``b_true = pred + pred x dtheta``; :func:`kalman_update`)."""
     H = np.zeros((3, 6))
     H[0, 1], H[0, 2], H[1, 2] = -pred[2], pred[1], -pred[0]
     H[1, 0], H[2, 0], H[2, 1] = pred[2], -pred[1], pred[0]
-    PHt = _mm(P, H.T.copy())
-    S = _mm(H, PHt)
-    for i in range(3):
-        S[i, i] += sigma * sigma
-    c00 = S[1, 1] * S[2, 2] - S[1, 2] * S[2, 1]
-    c01 = S[0, 2] * S[2, 1] - S[0, 1] * S[2, 2]
-    c02 = S[0, 1] * S[1, 2] - S[0, 2] * S[1, 1]
-    c11 = S[0, 0] * S[2, 2] - S[0, 2] * S[2, 0]
-    c12 = S[0, 2] * S[1, 0] - S[0, 0] * S[1, 2]
-    c22 = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
-    det = S[0, 0] * c00 + S[1, 0] * c01 + S[2, 0] * c02
-    Si = np.empty((3, 3))
-    Si[0, 0], Si[0, 1], Si[0, 2] = c00 / det, c01 / det, c02 / det
-    Si[1, 0], Si[1, 1], Si[1, 2] = c01 / det, c11 / det, c12 / det
-    Si[2, 0], Si[2, 1], Si[2, 2] = c02 / det, c12 / det, c22 / det
-    K = _mm(PHt, Si)
-    res = (meas[0] - pred[0], meas[1] - pred[1], meas[2] - pred[2])
-    dx = np.zeros(6)
-    for i in range(6):
-        dx[i] = K[i, 0] * res[0] + K[i, 1] * res[1] + K[i, 2] * res[2]
-    IKH = np.eye(6) - _mm(K, H)
-    R = np.zeros((3, 3))
-    for i in range(3):
-        R[i, i] = sigma * sigma
-    new = _mm(_mm(IKH, P), IKH.T.copy()) + _mm(_mm(K, R), K.T.copy())
-    for i in range(6):
-        for k in range(6):
-            P[i, k] = 0.5 * (new[i, k] + new[k, i])
-    qn = _normalized(qmul(q, _small_rotation((dx[0], dx[1], dx[2]))))
-    return qn, (b[0] + dx[3], b[1] + dx[4], b[2] + dx[5])
+    v = sigma * sigma
+    return kalman_update(q, b, P, H, (meas[0] - pred[0], meas[1] - pred[1], meas[2] - pred[2]), (v, v, v))
 
 
 @jit_inline
