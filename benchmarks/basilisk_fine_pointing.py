@@ -8,16 +8,17 @@ loop Basilisk 2.12 ships; one run and a Monte Carlo.
 Prints tables of ratios against baselines measured in the same run, interleaved (no number is
 quoted from elsewhere), and the machine's load (``os.getloadavg()``). Results:
 ``benchmarks/README.md``, section "Fine pointing (sensors + filter + PD on wheels) against
-Basilisk".
+Basilisk" (the scenario: the docstring below).
 
-The loop: ``scenarios/cubesat-fine-pointing.toml`` when it exists, else the text that
-``tests/control/test_navigation.py::_fine_pointing_text`` builds (``scenarios/cubesat-slew-
-wheels.toml``: a 6U, inertia diag(0.13, 0.11, 0.05) kg m2, three wheels on the body axes, 2e-5
-kg m2, 2e-3 N m, 6000 rpm, 10 Hz PD, kp = 4e-3 N m, kd = 1.4e-2 N m s, 550 km SSO, gravity
-gradient; plus a gyro at 10 Hz, ARW 0.15 deg/sqrt(h), RRW 0.3 deg/h^1.5, bias (5, -3, 2) deg/h, a
-star tracker at 1 Hz, 10 arcsec per axis, and the MEKF, attitude_sigma 0.1 deg, bias_sigma 10
-deg/h) with the initial attitude set to the target (90 deg about body axis 3): an inertial hold
-for one orbit (5,677 s), outputs every second.
+The loop: the text that ``tests/control/test_navigation.py::_fine_pointing_text`` builds
+(``scenarios/cubesat-slew-wheels.toml``: a 6U, inertia diag(0.13, 0.11, 0.05) kg m2, three
+wheels on the body axes, 2e-5 kg m2, 2e-3 N m, 6000 rpm, 10 Hz PD, kp = 4e-3 N m, kd = 1.4e-2
+N m s, 550 km SSO, gravity gradient; plus a gyro at 10 Hz, ARW 0.15 deg/sqrt(h), RRW 0.3
+deg/h^1.5, bias (5, -3, 2) deg/h, a star tracker at 1 Hz, 10 arcsec per axis, and the MEKF,
+attitude_sigma 0.1 deg, bias_sigma 10 deg/h) with the initial attitude set to the target (90 deg
+about body axis 3): an inertial hold for one orbit (5,677 s), outputs every second. Not the
+shipped ``scenarios/cubesat-fine-pointing.toml``: it adds drag, solar pressure, a residual
+dipole, a star tracker misalignment and exclusions, none of which the Basilisk loop here has.
 
 * orbatt: ``Scenario.run()`` (propagate + Dataset); its sensors, MEKF and law run in the
   compiled kernel at the ticks (docs/design.md section 14).
@@ -82,7 +83,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-SHIPPED = ROOT / "scenarios" / "cubesat-fine-pointing.toml"
 BASE = ROOT / "scenarios" / "cubesat-slew-wheels.toml"
 DT = 0.1                 # s, the flight software's rate, the gyro's, Basilisk's task step
 ST_PERIOD = 1.0          # s, the star tracker's
@@ -112,15 +112,12 @@ bias_sigma = "10 deg/h"
 
 
 def scenario_text(t_end, samples=None):
-    """The fine-pointing scenario (the shipped file if it exists, else the slew on wheels with
-    the sensors and the MEKF and the initial attitude on the target), ``t_end`` seconds, outputs
-    every second; with ``samples``, a ``[sweep]`` over the initial rates."""
-    if SHIPPED.exists():
-        text = SHIPPED.read_text()
-    else:
-        text = BASE.read_text().replace('period = "0.1 s"\n', 'period = "0.1 s"\n' + SENSORS, 1)
-        target = re.search(r"target_q = (\[[^\]]*\])", text).group(1)
-        text = re.sub(r'(\[initial\][^\[]*?)q = \[[^\]]*\]', lambda m: f"{m.group(1)}q = {target}", text, count=1)
+    """The fine-pointing scenario (the slew on wheels with the sensors and the MEKF and the
+    initial attitude on the target), ``t_end`` seconds, outputs every second; with ``samples``,
+    a ``[sweep]`` over the initial rates."""
+    text = BASE.read_text().replace('period = "0.1 s"\n', 'period = "0.1 s"\n' + SENSORS, 1)
+    target = re.search(r"target_q = (\[[^\]]*\])", text).group(1)
+    text = re.sub(r'(\[initial\][^\[]*?)q = \[[^\]]*\]', lambda m: f"{m.group(1)}q = {target}", text, count=1)
     text = re.sub(r't_end = "[^"]*"', f't_end = "{t_end:g} s"', text)
     text = re.sub(r'output_step = "[^"]*"', f'output_step = "{OUT_STEP:g} s"', text)
     if samples:
@@ -171,7 +168,6 @@ def orbatt_single(sc):
     w = time.perf_counter()
     ds = sc.run()
     w = time.perf_counter() - w
-    t = np.asarray(ds["time"].values, dtype=float) if "time" in ds else np.asarray(sc.times, dtype=float)
     target = np.asarray(sc.spec.control["control"]["target_q"], dtype=float)
     pe = angle(np.asarray(ds["q"].values), target[None, :])
     ke = np.linalg.norm(np.asarray(ds["knowledge_error"].values), axis=1)
@@ -452,8 +448,8 @@ def part_single(t_end, repeats):
     p = setup(sc)
     orbits = p["t_end"] / sc.orbit.period_value
     print(f"\n## A. One run: {p['t_end']:g} s ({orbits:.2f} orbit), flight software and gyro at {DT:g} s, star "
-          f"tracker at {ST_PERIOD:g} s ({round(p['t_end'] / DT)} ticks); scenario: "
-          f"{'scenarios/' + SHIPPED.name if SHIPPED.exists() else 'built from ' + BASE.name}; {load_line()}\n")
+          f"tracker at {ST_PERIOD:g} s ({round(p['t_end'] / DT)} ticks); scenario: built from "
+          f"{BASE.name}; {load_line()}\n")
     w = time.perf_counter()
     orbatt_single(sc)                             # compiles or loads the kernels
     print(f"(warm-up: first orbatt run {time.perf_counter() - w:.1f} s)")
