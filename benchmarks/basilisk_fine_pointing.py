@@ -58,7 +58,8 @@ axis; each case draws its own sensor noise (orbatt: the case word; Basilisk: ``C
 seed dispersion of every module's ``RNGSeed``). orbatt: a whole ``orbatt sweep`` process (the
 scheduler chosen by the work; outputs ``ape``, ``ake``, ``final_state``) and
 ``load_sweep(path).compute()`` in this process. Basilisk: ``Basilisk.utilities.MonteCarlo.
-Controller`` (works offline) with 2 worker processes, a retention function returning each case's
+Controller`` (works offline; from a fresh process: forking one where numba has started threads
+can hang its workers) with 2 worker processes, a retention function returning each case's
 APE and AKE, on a subset of the cases, scaled linearly to N; and its per-case build + Initialize
 + Execute in this process (what each worker does, without the pool). Controller's worker sleeps
 1 s after queueing each case's retained data (``time.sleep(1)`` in ``SimulationExecutor``): part
@@ -69,6 +70,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import functools
+import json
 import math
 import os
 import re
@@ -428,6 +430,28 @@ def basilisk_controller(p, cases, workers, folder):
     return wall, kept
 
 
+def controller_process(t_end, cases, workers, folder):
+    """:func:`basilisk_controller` in a fresh Python process (its pool forks: forking this
+    process, with numba's threads started, can hang the children). Returns (the Controller's
+    wall s, retained dicts)."""
+    cmd = [sys.executable, __file__, "--controller", f"{t_end:g},{cases},{workers},{folder}"]
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    res = json.loads(out.strip().splitlines()[-1])
+    return res["wall"], res["kept"]
+
+
+def _controller_main(arg):
+    import orbatt
+
+    t_end, cases, workers, folder = arg.split(",", 3)
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    path = Path(folder) / "fine-pointing.toml"
+    path.write_text(scenario_text(float(t_end)))
+    p = setup(orbatt.load_scenario(path))
+    wall, kept = basilisk_controller(p, int(cases), int(workers), Path(folder) / "mc")
+    print(json.dumps({"wall": wall, "kept": kept}))
+
+
 # -- the parts --------------------------------------------------------------------------------
 
 def best_median(x):
@@ -516,7 +540,7 @@ def part_mc(t_end, samples, bsk_cases, repeats):
         w = time.perf_counter()
         ds = sweep.compute()
         t_comp.append(time.perf_counter() - w)
-        wall, kept = basilisk_controller(p, bsk_cases, cores, folder / f"bsk{rep}")
+        wall, kept = controller_process(t_end, bsk_cases, cores, folder / f"bsk{rep}")
         t_ctrl.append(wall)
         b = basilisk_case(p, omega0=np.radians([RATE_SPREAD_DEG / 2, -RATE_SPREAD_DEG / 3, RATE_SPREAD_DEG / 4]),
                           seeds=(100 + rep, 200 + rep))
@@ -552,7 +576,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="1/8 orbit, 40 cases, 4 Basilisk Controller cases")
     ap.add_argument("--only", choices=("a", "b"), help="run one part")
+    ap.add_argument("--controller", help=argparse.SUPPRESS)      # T_END,CASES,WORKERS,FOLDER: the child
     args = ap.parse_args(argv)
+    if args.controller:
+        return _controller_main(args.controller)
     try:
         import Basilisk  # noqa: F401
     except ImportError:
