@@ -22,6 +22,7 @@ SHORT = {  # t_end for a short CI run of each shipped scenario
     "cubesat-detumble-montecarlo": '"600 s"', "nadir-hold-montecarlo": '"600 s"',
     "didymos-dimorphos": '"1.5 d"', "sphere-ellipsoid-equilibrium": '"1 orbits"',
     "didymos-dimorphos-montecarlo": '"1 d"', "cubesat-slew-wheels": '"60 s"', "cubesat-mission-modes": '"600 s"',
+    "cubesat-fine-pointing": '"60 s"',
 }
 
 

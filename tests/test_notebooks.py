@@ -18,7 +18,8 @@ import pytest
 
 NOTEBOOK_DIR = Path(__file__).resolve().parent.parent / "notebooks"
 NOTEBOOKS = ["paper_figures.ipynb", "gg_stabilized_satellite.ipynb", "torque_budget.ipynb", "attitude_control.ipynb",
-             "binary_asteroid.ipynb", "monte_carlo.ipynb", "flight_software.ipynb"]
+             "binary_asteroid.ipynb", "monte_carlo.ipynb", "flight_software.ipynb",
+             "pointing_budget.ipynb"]
 KERNEL_NAME = "orbatt-test-python"
 CELL_TIMEOUT_S = 600  # a cold numba cache compiles the kernels on first use
 
