@@ -21,7 +21,7 @@ shipped ``scenarios/cubesat-fine-pointing.toml``: it adds drag, solar pressure, 
 dipole, a star tracker misalignment and exclusions, none of which the Basilisk loop here has.
 
 * orbatt: ``Scenario.run()`` (propagate + Dataset); its sensors, MEKF and law run in the
-  compiled kernel at the ticks (docs/design.md section 14).
+  compiled kernel at the ticks (docs/design.md §14).
 * Basilisk: ``spacecraft`` (hub = orbatt's inertia, 12 kg) + ``reactionWheelStateEffector``
   (BalancedWheels, same axes, Js, limits) + ``GravityGradientEffector``, point-mass Earth with
   orbatt's GM and the same elements; RK4 at 0.1 s (its default). Three tasks of one process, in

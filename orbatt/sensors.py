@@ -270,6 +270,10 @@ class Navigation:
                 raise InputError(f"estimator: expected orbatt.MEKF, got {type(estimator).__name__}")
             if gyro is None:
                 raise InputError("estimator: the MEKF propagates with a gyro; add [sensors.gyro]")
+            if star_tracker is not None and not min(star_tracker.noise, star_tracker.noise_roll) > 0.0:
+                raise InputError("star_tracker noise: the filter's update needs a positive measurement noise (a perfect "
+                                 "attitude measurement leaves its covariance singular); give the tracker's 1-sigma "
+                                 "noise, e.g. '10 arcsec'")
             if star_tracker is None and magnetometer is None and sun_sensor is None:
                 raise InputError("estimator: the MEKF needs a sensor to update with; add [sensors.star_tracker], "
                                  "[sensors.magnetometer] or [sensors.sun_sensor]")

@@ -103,13 +103,14 @@ def navigation_variables(model, q, z, t, tdims, nwheels, navigation):
         data["gyro_measurement"] = _var(vv, _slot(z, col, "w_meas"), "rad s-1",
                                         "the gyro's last measurement of the body rate", frame="B")
     if navigation.star_tracker is not None:
-        valid = _slot(z, col, "valid")[..., 0]
+        valid = _slot(z, col, "st_ok")[..., 0]
         data["star_tracker_valid"] = _var(tdims, valid.astype(np.int8), "1",
-                                          "whether the star tracker measured at the last tick",
+                                          "whether the star tracker measured at its last due sample",
                                           flag_values=np.array([0, 1], dtype=np.int8),
-                                          flag_meanings="no_measurement measured",
-                                          comment="no measurement at a tick where it was not due, or where the Sun or "
-                                                  "the Earth's limb was within its exclusion angle")
+                                          flag_meanings="outage measured",
+                                          comment="0 from a due sample where the Sun or the Earth's limb was within its "
+                                                  "exclusion angle until the next that measures (between its samples it "
+                                                  "keeps the last one's value)")
     if navigation.magnetometer is not None or navigation.sun_sensor is not None:
         data["vector_updates"] = _var(tdims, _slot(z, col, "vector")[..., 0].astype(np.int8), "1",
                                       "filter updates by the magnetometer and the Sun sensor at the last tick",

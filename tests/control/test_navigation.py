@@ -438,3 +438,9 @@ def test_star_tracker_misalignment_biases_the_knowledge_error(tmp_path):
                       t_end="300 s")
     mean = np.degrees(ds["knowledge_error"].values[10:].mean(axis=0)) * 3600
     np.testing.assert_allclose(mean, [-40.0, 0.0, 0.0], atol=5.0)
+
+
+def test_a_perfect_star_tracker_is_refused_with_a_filter():
+    with pytest.raises(InputError, match="positive measurement noise"):
+        Navigation(1, gyro=Gyro(10 * u.Hz, ARW), star_tracker=StarTracker(1 * u.Hz, 0 * u.arcsec),
+                   estimator=MEKF(0.1 * u.deg, 1 * u.deg / u.h))
