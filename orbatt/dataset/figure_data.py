@@ -29,7 +29,7 @@ __all__ = ["ModeInterval", "mode_intervals", "FIGURES", "LVLH_LABELS", "LVLH_DEF
            "log_values", "impulse_times", "libration_angle"]
 
 #: every figure orbatt draws, in the order they are written (``<name>-<figure>.png``)
-FIGURES = ("pointing", "orbit", "rates", "wheels", "torques", "drift")
+FIGURES = ("pointing", "knowledge", "orbit", "rates", "wheels", "torques", "drift")
 
 
 def _json_attr(ds, name):
@@ -311,6 +311,7 @@ def choose_figures(ds):
 
     - ``pointing``: a pointing reference (:func:`pointing_error`: a PD target, or the orbital
       frame of an uncontrolled run with an orbit);
+    - ``knowledge``: an attitude filter (``knowledge_error``): its error and 3 sigma;
     - ``orbit``: a binary (``separation``): the mutual orbit, its period and the libration;
     - ``rates``: always (``omega``);
     - ``wheels``: reaction wheels (``wheel_speed``);
@@ -320,6 +321,8 @@ def choose_figures(ds):
     out = []
     if pointing_error(ds) is not None:
         out.append("pointing")
+    if "knowledge_error" in ds:
+        out.append("knowledge")
     if "separation" in ds:
         out.append("orbit")
     out.append("rates")

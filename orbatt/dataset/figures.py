@@ -25,7 +25,7 @@ from .figure_data import (FIGURES, eclipse_intervals, log_values, mode_intervals
                           wheel_gyroscopic, wheel_limits)
 from .plots import mark_impulses, plot_drift, time_axis, time_values
 
-__all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "LIMIT_SHOWN", "TORQUE_COLORS", "draw",
+__all__ = ["ENSEMBLE_LINES", "LOG_DECADES", "EULER_PANEL_MAX_DEG", "LIMIT_SHOWN", "TORQUE_COLORS", "draw", "plot_knowledge",
            "plot_pointing", "plot_rates", "plot_wheels", "plot_torques", "plot_orbit", "shade_modes", "MODE_SHADES"]
 
 #: an ensemble with more cases than this is drawn as a median and bands instead of a line per case
@@ -463,6 +463,49 @@ def plot_orbit(ds, fig=None, time="auto"):
     return _finish(fig, axes, ds, x, xlabel, "mutual orbit and libration", time)
 
 
+def plot_knowledge(ds, fig=None, time="auto"):
+    """The attitude filter's knowledge (issue 33): the knowledge error's magnitude (the rotation
+    from the estimate to the truth) with three times the filter's 1-sigma (the root sum square
+    of its attitude sigmas), and, for one run, each body component with its +-3 sigma band, in
+    arcsec. The star tracker's outages (``star_tracker_valid`` 0) are drawn as marks.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        With ``knowledge_error`` and ``knowledge_sigma`` (a run with ``[estimator]``).
+    fig : matplotlib.figure.Figure, optional
+    time : {"auto", "utc", "orbits", "time", "elapsed"}
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if "knowledge_error" not in ds:
+        raise ValueError("knowledge: the Dataset has no knowledge_error (a run with an [estimator] has)")
+    e, unit = values_in(ds, "knowledge_error", "arcsec")
+    sig, _ = values_in(ds, "knowledge_sigma", "arcsec")
+    panels = 1 if _cases(ds) else 2
+    fig, axes = _new(fig, panels, (11, 3.4 + 2.8 * (panels - 1)))
+    x, xlabel = time_axis(ds, time)
+    mag = np.linalg.norm(e, axis=-1)
+    _series(axes[0], x, mag, label="|knowledge error|", color="black", lw=1.0)
+    _series(axes[0], x, 3.0 * np.linalg.norm(sig, axis=-1), label="3 sigma (filter: root sum square of the axes)", color="tab:red", lw=1.0, ls="--")
+    if "star_tracker_valid" in ds and not _cases(ds):
+        out = np.asarray(ds["star_tracker_valid"].values) == 0
+        if out.any():
+            axes[0].plot(np.asarray(x)[out], np.zeros(int(out.sum())), "|", color="tab:orange",
+                         label="star tracker outage")
+    axes[0].set_ylabel(f"[{unit}]")
+    axes[0].set_title("knowledge error: the rotation from the filter's estimate to the truth", fontsize="medium")
+    if panels == 2:
+        for k in range(3):
+            axes[1].plot(x, e[..., k], label=f"error_{_AXES[k]}", color=_COLORS[k], lw=0.8)
+            axes[1].fill_between(x, -3.0 * sig[..., k], 3.0 * sig[..., k], color=_COLORS[k], alpha=0.12, lw=0)
+        axes[1].set_ylabel(f"[{unit}]")
+        axes[1].set_title("body components, shaded: +-3 sigma of each", fontsize="medium")
+    return _finish(fig, axes, ds, x, xlabel, "knowledge", time)
+
+
 def _plot_drift(ds, fig=None, time="auto"):
     if _cases(ds):
         raise ValueError("drift: an ensemble's cases each have their own invariant; draw one case: "
@@ -470,7 +513,7 @@ def _plot_drift(ds, fig=None, time="auto"):
     return plot_drift(ds, fig=fig, time=time)
 
 
-_DRAW = {"pointing": plot_pointing, "rates": plot_rates, "wheels": plot_wheels, "torques": plot_torques,
+_DRAW = {"pointing": plot_pointing, "knowledge": plot_knowledge, "rates": plot_rates, "wheels": plot_wheels, "torques": plot_torques,
          "orbit": plot_orbit, "drift": _plot_drift}
 
 

@@ -98,9 +98,9 @@ def navigation_variables(model, q, z, t, tdims, nwheels, navigation):
     vv, qv = tdims + ("axis",), tdims + ("quat",)
     data = {}
     if navigation.gyro is not None:
-        data["gyro_bias"] = _var(vv, _slot(z, col, "beta"), "rad s-1", "true bias of the gyro at its last sample",
+        data["gyro_bias"] = _var(vv, _slot(z, col, "beta"), "rad s^-1", "true bias of the gyro at its last sample",
                                  frame="B", comment="Farrenkopf's model: w_meas = omega + bias + noise")
-        data["gyro_measurement"] = _var(vv, _slot(z, col, "w_meas"), "rad s-1",
+        data["gyro_measurement"] = _var(vv, _slot(z, col, "w_meas"), "rad s^-1",
                                         "the gyro's last measurement of the body rate", frame="B")
     if navigation.star_tracker is not None:
         valid = _slot(z, col, "st_ok")[..., 0]
@@ -129,7 +129,7 @@ def navigation_variables(model, q, z, t, tdims, nwheels, navigation):
                                        "filter's 1-sigma attitude uncertainty per axis", frame="B",
                                        comment="square root of the covariance's attitude diagonal, as held since "
                                                "the last tick")
-        data["bias_estimate"] = _var(vv, _slot(z, col, "b_hat"), "rad s-1", "the filter's estimate of the gyro bias",
+        data["bias_estimate"] = _var(vv, _slot(z, col, "b_hat"), "rad s^-1", "the filter's estimate of the gyro bias",
                                      frame="B")
     key = f"seed {navigation.seed}, case {navigation.case}"  # the noise's key (orbatt.core.noise)
     for v in data.values():

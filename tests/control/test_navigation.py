@@ -444,3 +444,25 @@ def test_a_perfect_star_tracker_is_refused_with_a_filter():
     with pytest.raises(InputError, match="positive measurement noise"):
         Navigation(1, gyro=Gyro(10 * u.Hz, ARW), star_tracker=StarTracker(1 * u.Hz, 0 * u.arcsec),
                    estimator=MEKF(0.1 * u.deg, 1 * u.deg / u.h))
+
+
+def test_the_knowledge_figure_draws_the_error_and_its_three_sigma():
+    """A run with a filter calls for the knowledge figure; it draws |knowledge_error| and three
+    times the root sum square of knowledge_sigma, in arcsec."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from orbatt.dataset.figure_data import choose_figures
+    from orbatt.dataset.figures import draw
+
+    times = np.arange(0.0, 21.0, 1.0)
+    _, _, tr = _at_rest(times, _nav())
+    ds = orbatt.to_dataset(tr)
+    assert "knowledge" in choose_figures(ds)
+    fig = draw(ds, "knowledge")
+    lines = fig.axes[0].get_lines()
+    arcsec = np.degrees(1.0) * 3600.0
+    np.testing.assert_allclose(lines[0].get_ydata(), np.linalg.norm(ds["knowledge_error"].values, axis=1) * arcsec,
+                               rtol=1e-12)
+    np.testing.assert_allclose(lines[1].get_ydata(),
+                               3 * np.linalg.norm(ds["knowledge_sigma"].values, axis=1) * arcsec, rtol=1e-12)

@@ -64,7 +64,7 @@ def test_slew_time_is_the_single_runs_attitude_error_to_the_target():
     assert t[k] < slew <= t[k + 1] and 85.0 < slew < 110.0  # the slew settles within 1 deg in about 95 s
     assert ds["slew_time"].attrs["units"] == "s" and ds["slew_time"].attrs["settling_angle_rad"] == np.deg2rad(1.0)
     assert slew == ds["settling_time"].values[0]  # the same computation: the law holds a target
-    _refused("bdot", '["slew_time"]\nsettling_angle = "1 deg"', r"slew_time.*holding a target")
+    _refused("bdot", '["slew_time"]\nsettling_angle = "1 deg"', r"slew_time.*with a target")
     _refused("slew", '["slew_time"]', r"\[sweep\] settling_angle.*missing; 'slew_time'")
     _refused("bdot", '["max_control_torque"]\nsettling_angle = "1 deg"',
              r"settling_angle.*only used with 'settling_time' or 'slew_time'")
