@@ -2,8 +2,8 @@
 descriptors in :mod:`orbatt.sweep_outputs` (issue 32 item 1); the names are kept here."""
 from __future__ import annotations
 
-from ..sweep_outputs import (OUTPUTS, SATURATION_MARGIN, crossing_time, refine_crossing, study_outputs, study_series,
-                             target_pointing_error, window_start)
+from ..crossings import crossing_time, refine_crossing, study_series
+from ..sweep_outputs import OUTPUTS, SATURATION_MARGIN, study_outputs, target_pointing_error, window_start
 
 __all__ = ["STUDY_OUTPUTS", "crossing_time", "refine_crossing", "window_start", "study_series",
            "target_pointing_error", "study_outputs", "SATURATION_MARGIN"]
