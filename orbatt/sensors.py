@@ -289,28 +289,36 @@ class Navigation:
         self.period = gyro.period if gyro is not None else star_tracker.period
         self.every = 0 if star_tracker is None else self._every(star_tracker, "star_tracker")
 
+    def _ticks(self, period):
+        """``period`` (s) in base ticks: a positive integer, or None when it is not one."""
+        n = period / self.period
+        return int(round(n)) if abs(n - round(n)) <= PERIOD_TOLERANCE * n and round(n) >= 1 else None
+
     def _every(self, sensor, name):
         """How many base ticks between ``sensor``'s samples (an integer, refused otherwise)."""
-        n = sensor.period / self.period
-        if abs(n - round(n)) > PERIOD_TOLERANCE * n or round(n) < 1:
+        n = self._ticks(sensor.period)
+        if n is None:
             raise InputError(f"{name} rate: its period {sensor.period:g} s is not an integer multiple of the gyro's "
                              f"{self.period:g} s (the sensors share one base tick); choose rates such as 10 Hz and "
                              "1 Hz")
-        return int(round(n))
+        return n
 
-    def check_law(self, law):
-        """Refuse a control law whose ticks are not ticks of the sensors: a law on the estimate
-        needs a period, an integer multiple of the base tick."""
-        period = getattr(law, "period", None)
+    def check_period(self, period):
+        """Refuse a control law's ``period`` (s, None: a continuous law) whose ticks are not ticks
+        of the sensors: a law on the estimate needs a period, an integer multiple of the base
+        tick."""
         if period is None:
             if self.feedback == "estimate":
                 raise InputError("[control] period: a law acting on the estimate runs at the flight software's rate; "
                                  f"give period (a multiple of the gyro's {self.period:g} s), or feedback = 'truth'")
             return
-        n = period / self.period
-        if abs(n - round(n)) > PERIOD_TOLERANCE * n or round(n) < 1:
+        if self._ticks(period) is None:
             raise InputError(f"[control] period: {period:g} s is not an integer multiple of the sensors' base tick "
                              f"{self.period:g} s (the gyro's period); the law reads the estimate at its ticks")
+
+    def check_law(self, law):
+        """:meth:`check_period` of ``law``'s period."""
+        self.check_period(getattr(law, "period", None))
 
     @property
     def reads_sun(self):

@@ -295,6 +295,12 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
     return omega, h, tau, m, u
 
 
+@jit_inline
+def _error_angle(e):
+    """The rotation angle (rad) of a PD law's error ``e = sgn(q_e0) Im(q_e)``: ``2 asin |e|``."""
+    return 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
+
+
 @jit
 def law_errors(t, q, terms, params, table, work):
     """The attitude error angle (rad, ``(N,)``) of the model's first PD law at the times ``t
@@ -311,7 +317,7 @@ def law_errors(t, q, terms, params, table, work):
             r, xhat, v = orbit_radial(t[i], terms, params, table, work)
             aux, aux_rate = pd_row_target(j, t[i], terms, params, table, work)
             e, _ = ctl.pd_error((q[i, 0], q[i, 1], q[i, 2], q[i, 3]), params, p0, r, xhat, v, aux, aux_rate)
-            out[i] = 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
+            out[i] = _error_angle(e)
         break
     return out
 
@@ -528,7 +534,7 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
                 if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
                     aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
                     e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, aux, aux_rate)
-                    angle = 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
+                    angle = _error_angle(e)
             holds = holds and angle < settled
         if holds:
             if y[z + 3] == 0.0:

@@ -45,24 +45,13 @@ def estimate_at(t, z, col):
     qh = _slot(z, col, "q_hat")
     w = _slot(z, col, "w_meas") - _slot(z, col, "b_hat")
     dt = t - _slot(z, col, "t_last")[..., 0]
-    n = np.sqrt(w[..., 0] * w[..., 0] + w[..., 1] * w[..., 1] + w[..., 2] * w[..., 2])
-    half = 0.5 * n * dt
-    with np.errstate(invalid="ignore", divide="ignore"):
-        s = np.where(n > 0.0, np.sin(half) / np.where(n > 0.0, n, 1.0), 0.5 * dt)
-    turn = np.concatenate([np.cos(half)[..., None], s[..., None] * w], axis=-1)
-    return qt.normalize(qt.mul(qh, turn))
+    return qt.normalize(qt.mul(qh, qt.from_rotvec(w * dt[..., None])))
 
 
 def knowledge_error(q, q_hat):
     """The rotation vector (rad, body axes) of ``q_hat~ q``: the rotation that turns the
     estimated body axes onto the true ones (``q = q_hat (x) dq``), ``(..., 3)``."""
-    d = qt.mul(qt.conj(q_hat), q)
-    v = d[..., 1:]
-    s = np.sqrt(np.sum(v * v, axis=-1))
-    ang = 2.0 * np.arctan2(s, np.abs(d[..., 0]))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        scale = np.where(s > 0.0, ang / np.where(s > 0.0, s, 1.0), 2.0) * np.where(d[..., 0] < 0.0, -1.0, 1.0)
-    return v * scale[..., None]
+    return qt.to_rotvec(qt.mul(qt.conj(q_hat), q))
 
 
 def _var(dims, data, units, long_name, **extra):

@@ -185,11 +185,7 @@ def parse_navigation(ctx, data, control, orbit):
             "bias_sigma": parse_quantity(ctx, "[estimator] bias_sigma", _required(ctx, e, "estimator", "bias_sigma"),
                                          _RATE, dimensionless=False)}
     try:
-        nav = navigation_of(out)
-        if control.get("period") is None and nav.feedback == "estimate":
-            nav.check_law(type("Law", (), {"period": None})())
-        elif control.get("period") is not None:
-            nav.check_law(type("Law", (), {"period": control["period"]})())
+        navigation_of(out).check_period(control.get("period"))
     except InputError as exc:
         msg = str(exc)
         key, _, rest = msg.partition(": ")
