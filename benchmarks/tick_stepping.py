@@ -41,31 +41,13 @@ import orbatt  # noqa: E402
 from orbatt import quaternion as qt  # noqa: E402
 from orbatt.scenario import Scenario, parse  # noqa: E402
 from run import kepler_case  # noqa: E402
+from basilisk_fine_pointing import SENSORS  # noqa: E402  (the fine-pointing loop's sensors and MEKF)
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED = ROOT / "scenarios" / "cubesat-fine-pointing.toml"
 SLEW = ROOT / "scenarios" / "cubesat-slew-wheels.toml"
 LVLH = ROOT / "scenarios" / "lvlh-hold-wheels.toml"
 PERIOD = 0.1  # s, the flight software's tick
-SENSORS = '''
-[sensors]
-seed = 20261128
-
-[sensors.gyro]
-rate = "10 Hz"
-arw = "0.15 deg/sqrt(h)"
-rrw = "0.3 deg / h(3/2)"
-bias = ["5 deg/h", "-3 deg/h", "2 deg/h"]
-
-[sensors.star_tracker]
-rate = "1 Hz"
-noise = "10 arcsec"
-
-[estimator]
-kind = "mekf"
-attitude_sigma = "0.1 deg"
-bias_sigma = "10 deg/h"
-'''
 #: (method, rtol): the runs of table 1 (the reference: dop853 at 1e-12)
 RUNS = (("dop853", 1e-10), ("dopri5", 1e-10), ("vern98", 1e-10), ("dopri5", 1e-8), ("dopri5", 1e-12))
 REFERENCE = ("dop853", 1e-12)
