@@ -6,8 +6,9 @@ scenario): its kernel rows are those of its modes' laws, each marked with its mo
 only while the sequence is in its mode: :func:`orbatt.core.gyrostat.row_active`), then the
 sequence's row (:data:`orbatt.core.control.MODES`) whose state ``(mode, entry time, time the
 condition began to hold)`` follows the laws' held commands in the state. Transitions are
-decided at the flight software's ticks (:func:`orbatt.core.gyrostat.mode_transition`), so a
-sequence needs a ``period``; the Dataset gets ``mode`` along ``time`` (CF ``flag_values`` /
+decided at the flight software's ticks (:func:`orbatt.core.gyrostat.mode_transition`), or,
+for a sequence without a ``period`` (continuous laws), located on the continuous solution at
+the instant a condition is met (:mod:`orbatt.core.mode_events`); the Dataset gets ``mode`` along ``time`` (CF ``flag_values`` /
 ``flag_meanings`` naming the modes) and ``mode_entry_time``.
 """
 from __future__ import annotations
@@ -102,9 +103,11 @@ class ModeSequence:
     ----------
     modes : list of Mode
         In order; every mode but the last needs a condition to leave it.
-    period : Quantity (time)
+    period : Quantity (time) or None
         The flight software's period: the laws' ticks and the transitions' (every mode's law
-        runs at it).
+        runs at it). None: the laws are continuous and each transition is located on the
+        continuous solution, at the instant its condition is met
+        (:mod:`orbatt.core.mode_events`; ensembles member by member, not in lockstep lanes).
     """
 
     law = "modes"
@@ -122,11 +125,12 @@ class ModeSequence:
             if not m.has_exit:
                 raise InputError(f"modes: mode {m.name!r} has no condition to leave it (until_time, until_rate or "
                                  "until_settled), so the modes after it never run")
-        if period is None:
-            raise InputError("period: a mode sequence needs the flight software's period (its transitions are "
-                             "decided at its ticks), e.g. period = '1 s'")
         self.period = flight_period(period)
         for m in modes:
+            if m.law.period is not None and self.period is None:
+                raise InputError(f"period: mode {m.name!r}'s law runs at {m.law.period:g} s and the sequence has no "
+                                 "period (continuous laws); give the sequence the period (ModeSequence(..., "
+                                 "period=...), [control] period) so that every mode runs at it")
             if m.law.period is not None and m.law.period != self.period:
                 raise InputError(f"period: mode {m.name!r}'s law runs at {m.law.period:g} s, the sequence at "
                                  f"{self.period:g} s; the flight software has one rate")
@@ -161,7 +165,8 @@ class ModeSequence:
                 row, nz = _shifted(row, z, i)
                 rows.append(row)
                 z += nz
-        rows.append((km.MODES, kc.modes_params(self.period, z, [m.conditions() for m in self.modes]), None))
+        rows.append((km.MODES, kc.modes_params(0.0 if self.period is None else self.period, z,
+                                               [m.conditions() for m in self.modes]), None))
         return rows
 
     def describe(self):
@@ -171,4 +176,5 @@ class ModeSequence:
                           for m in self.modes]}
 
     def __repr__(self):
-        return f"ModeSequence({' -> '.join(self.names)}, period={self.period:g} s)"
+        rate = "continuous" if self.period is None else f"period={self.period:g} s"
+        return f"ModeSequence({' -> '.join(self.names)}, {rate})"

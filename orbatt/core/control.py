@@ -111,9 +111,9 @@ def wheel_params(axes, inertia, max_torque, max_speed, coulomb=0.0, viscous=0.0,
 
 def modes_params(period, z0, conditions, phase=0.0):
     """The parameters of a :data:`~orbatt.core.model.MODES` row: the flight software's
-    ``period`` (> 0), its state at ``y[z0:z0 + 3]``, and ``conditions (n, MODE_FIELDS)``."""
-    if not period > 0.0:
-        raise ValueError("a mode sequence needs the flight software's period")
+    ``period`` (0: continuous laws, the transitions located on the solution:
+    :mod:`orbatt.core.mode_events`), its state at ``y[z0:z0 + 4]``, and ``conditions (n,
+    MODE_FIELDS)``."""
     c = np.asarray(conditions, dtype=np.float64).reshape(-1, MODE_FIELDS)
     return MODES.pack(tail=c, count=float(c.shape[0]), nz=4.0, mode=-1.0,
                       **flight_software(period, phase, z0))

@@ -296,7 +296,7 @@ def evaluate_extended(t, Y, inertia, terms, params, table, work):
 
 
 @jit_inline
-def _error_angle(e):
+def error_angle(e):
     """The rotation angle (rad) of a PD law's error ``e = sgn(q_e0) Im(q_e)``: ``2 asin |e|``."""
     return 2.0 * math.asin(min(1.0, math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])))
 
@@ -317,7 +317,7 @@ def law_errors(t, q, terms, params, table, work):
             r, xhat, v = orbit_radial(t[i], terms, params, table, work)
             aux, aux_rate = pd_row_target(j, t[i], terms, params, table, work)
             e, _ = ctl.pd_error((q[i, 0], q[i, 1], q[i, 2], q[i, 3]), params, p0, r, xhat, v, aux, aux_rate)
-            out[i] = _error_angle(e)
+            out[i] = error_angle(e)
         break
     return out
 
@@ -351,10 +351,12 @@ def _on_grid(s, t, phase, period, terms, params):
 
 @jit
 def has_ticks(terms, params):
-    """Whether a control law of the model runs at a flight-software period."""
+    """Whether a control law of the model runs at a flight-software period, or the model has a
+    mode sequence (a continuous one, without a period, begins in its first mode at the
+    driver's start tick too: :mod:`orbatt.core.mode_events`)."""
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
-        if is_flight_software(kind) and params[terms[j, P0] + _CTL_PERIOD] > 0.0:
+        if kind == MODES or (is_flight_software(kind) and params[terms[j, P0] + _CTL_PERIOD] > 0.0):
             return True
     return False
 
@@ -516,6 +518,8 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
         y[z + 2] = t
         y[z + 3] = 0.0
         return
+    if not params[p0 + _CTL_PERIOD] > 0.0:  # a continuous sequence: orbatt.core.mode_events
+        return
     if not _on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params):
         return
     m = int(y[z])
@@ -534,7 +538,7 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
                 if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
                     aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
                     e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, aux, aux_rate)
-                    angle = _error_angle(e)
+                    angle = error_angle(e)
             holds = holds and angle < settled
         if holds:
             if y[z + 3] == 0.0:

@@ -41,6 +41,7 @@ import numpy as np
 from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, INTERPRETED,
                    borrow, borrow_model, jit, jit_inline, keepalive)
 from .gyrostat import has_ticks, next_tick, rhs_extended, rhs_extended_lanes, tick
+from .mode_events import advance as advance_modes, next_event, sequence_count
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
 from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
@@ -49,9 +50,15 @@ from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES
                            ST_SWITCH_K, ST_SWITCH_T, ST_T, PAIRS, TABLEAUS, accept_step, all_finite, begin_attempt,
                            controller, controller9, controller_pow, error_norm, hinit_der2, hinit_guess, hinit_norms,
                            hinit_refine, hinit_refine_order, momentum_scale, reject_nonfinite, reject_step)
-from .switches import AT_START, crossed, locate, switch_count, switch_values, update
+from .switches import AT_START, REARM, crossed, locate, loop_switch_values, loop_switches, update
 
-__all__ = ["loop_of", "stage_input"]
+__all__ = ["loop_of", "stage_input", "ROOT_TOL", "MAX_REFINE"]
+
+#: a mode sequence's crossing is landed on where its function, on the integrated state, is
+#: within this of zero (its functions are relative: ``|omega| / until_rate - 1``)
+ROOT_TOL = 1.0e-12
+#: at most this many retakes refine one crossing (then the interpolant's root stands)
+MAX_REFINE = 8
 
 
 @jit_inline
@@ -287,20 +294,30 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         if EXTENDED:
             if ticks:
                 t_tick = next_tick(t, terms, params)
+        # --- mode sequences without a period (orbatt.core.mode_events): their transitions'
+        # times are knots like the ticks, their conditions' crossings switching functions
+        nseq = 0
+        if SWITCHES and EXTENDED:
+            nseq = sequence_count(terms, params)
+            if nseq > 0:
+                t_tick = min(t_tick, next_event(t, y1, terms, params))
         # --- the switching functions (orbatt.core.switches): references armed at t, the switch
         # located by an earlier call that the next steps land on (t_sw, function k_sw)
         nsw = 0
         t_sw = np.inf
         k_sw = -1
-        swown = np.empty((3, MAX_SWITCHES + 4))
+        nfac = 0
+        refine = 0     # retakes of the current mode crossing (orbatt.core.mode_events)
+        h_aim = 0.0    # the next step's length aimed past a mode crossing the last one fell short of
+        swown = np.empty((2, MAX_SWITCHES + 4))
         gnew = swown[0]
-        gscr = swown[1]
+        gscr = np.empty(ncomp + MAX_SWITCHES + 4)
         if SWITCHES:
             # st[ST_SWITCH_K]: 0 at the first call (the references to arm), then 1 + (the
             # function of the located switch + 1, or 0); a resumed run keeps its references
-            nsw = switch_count(terms, params)
+            nsw, nfac = loop_switches(terms, params)
             if nsw > 0 and st[ST_SWITCH_K] == 0.0:
-                switch_values(t, y1, terms, params, table, work, gnew)
+                loop_switch_values(t, y1, inertia, terms, params, table, work, gnew, nfac)
                 update(work, gnew, nsw, k_sw)  # (-1 here; a literal -1 compiled update a second time)
             if nsw > 0 and st[ST_SWITCH_K] > 1.0:
                 t_sw = st[ST_SWITCH_T]
@@ -384,7 +401,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             sw_cross = False
             if SWITCHES:  # (a constant: `if` alone, so that numba prunes it from the other loops)
                 if nsw > 0 and not sw_land:  # an armed switching function changed sign?
-                    switch_values(t_new, ynew1, terms, params, table, work, gnew)
+                    loop_switch_values(t_new, ynew1, inertia, terms, params, table, work, gnew, nfac)
                     sw_cross = crossed(work, gnew, nsw)
             if err <= 1.0 or sw_cross:
                 # accepted (or to be located): the derivative at the new point (FSAL; Verner's
@@ -423,8 +440,8 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 if SWITCHES:
                     if sw_cross:
                         # the earliest root on the step's interpolant: retake the step to end there
-                        theta, k = locate(t, t_new - t, y1, K1[0], ynew1, K1[N_STAGES], gnew, nsw, terms, params,
-                                          table, work, gscr)
+                        theta, k = locate(t, t_new - t, y1, K1[0], ynew1, K1[N_STAGES], gnew, nsw, nfac, inertia,
+                                          terms, params, table, work, gscr)
                         if k >= 0 and theta > AT_START:
                             t_sw = t + theta * (t_new - t)
                             k_sw = k
@@ -435,15 +452,42 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         if err > 1.0:
                             flags, h, reject = reject_step(cnt, flags, hh, fac11)
                             continue
+                    if nseq > 0 and sw_land and k_sw >= nfac and refine < MAX_REFINE:
+                        # a mode sequence's crossing (orbatt.core.mode_events): its function on the
+                        # integrated state, not on the interpolant, to ROOT_TOL
+                        loop_switch_values(t_new, ynew1, inertia, terms, params, table, work, gnew, nfac)
+                        gl = gnew[k_sw]
+                        ref = work[SWITCH_SLOT + k_sw]
+                        if gl == gl and ref == ref and abs(gl) > ROOT_TOL:
+                            refine += 1
+                            if (gl > 0.0) != (ref > 0.0):  # past the root: locate it on this shorter step
+                                theta, k = locate(t, t_new - t, y1, K1[0], ynew1, K1[N_STAGES], gnew, nsw, nfac,
+                                                  inertia, terms, params, table, work, gscr)
+                                if k >= 0 and theta > AT_START:
+                                    t_sw = t + theta * (t_new - t)
+                                    k_sw = k
+                                    cnt[CNT_SWITCHES] += 1
+                                    continue
+                            elif abs(gl) < abs(ref):  # short of it: a plain step end, the next one aimed
+                                h_aim = 2.0 * gl * (t_new - t) / (ref - gl)  # past the root (secant)
+                                sw_land = False
+                                t_sw = np.inf
+                                k_sw = -1
                 flags, facold, hnew, reject = accept_step(cnt, flags, err, hnew, hh, h, max_step, reject, landing)
                 for i in range(ncomp):
                     for l in range(nl):
                         yg[i, l] = ynew[i, l]
                         K[0, i, l] = K[N_STAGES, i, l]
                 t = t_new
+                refine = 0
                 if SWITCHES:
                     if nsw > 0 and sw_land:
-                        switch_values(t, y1, terms, params, table, work, gnew)
+                        loop_switch_values(t, y1, inertia, terms, params, table, work, gnew, nfac)
+                    landed_seq = -1
+                    now_holds = False
+                    if nseq > 0 and sw_land and k_sw >= nfac:  # a mode sequence's conditions crossed:
+                        landed_seq = k_sw - nfac              # which way (the sign before the root)
+                        now_holds = work[SWITCH_SLOT + k_sw] > 0.0
                     if nsw > 0:
                         update(work, gnew, nsw, k_sw if sw_land else -1)
                     if sw_land:
@@ -460,6 +504,20 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                             rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
                         cnt[CNT_NFEV] += 1
                         t_tick = next_tick(t, terms, params)
+                if SWITCHES and EXTENDED:
+                    if nseq > 0:  # the continuous sequences: their flags, and a mode whose time came
+                        mode_changed, _ = advance_modes(t, y1, inertia, terms, params, table, work, landed_seq,
+                                                        now_holds, REARM, False)
+                        if mode_changed:  # the new mode's law from here, its conditions armed
+                            rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
+                            cnt[CNT_NFEV] += 1
+                            loop_switch_values(t, y1, inertia, terms, params, table, work, gnew, nfac)
+                            for k in range(nfac, nsw):
+                                work[SWITCH_SLOT + k] = gnew[k]
+                        t_tick = min(t_tick, next_event(t, y1, terms, params))
+                        if h_aim > 0.0:
+                            hnew = min(hnew, h_aim)
+                            h_aim = 0.0
                 row = -1
                 if landing and t == t_out[i_out]:  # (else a breakpoint)
                     if not record_all:

@@ -47,10 +47,12 @@ from . import environment as env
 from .model import (DRAG, DRAG_HEADER, FLAGS, KIND, NO_SWITCHES, P0, R0, R1, SHADOW_CONICAL, SHADOW_CYLINDRICAL,
                     SRP, SRP_HEADER, orbit_at, term_constants)
 from .potentials import MAX_SWITCHES, SWITCH_SLOT
+from .mode_events import mode_values, sequence_count
 from .qalg import rotate_inv
 from .torques import FACET_SIZE
 
-__all__ = ["REARM", "AT_START", "switch_count", "switch_values", "shadow_edges", "crossed", "locate", "update",
+__all__ = ["REARM", "AT_START", "switch_count", "switch_values", "loop_switches", "loop_switch_values", "shadow_edges",
+           "crossed", "locate", "update",
            "shadow_crossings", "eclipse_times", "MAX_SWITCHES", "SWITCH_SLOT"]
 
 #: a disarmed function is armed again once ``|g| > REARM`` at a step end
@@ -81,6 +83,28 @@ def switch_count(terms, params):
             elif shadow == SHADOW_CYLINDRICAL:
                 n += 1
     return min(n, MAX_SWITCHES)
+
+
+@jit
+def loop_switches(terms, params):
+    """``(n, nfac)``: the switching functions the step loop tracks - the terms' first ``nfac``
+    (:func:`switch_count`), then one per continuous mode sequence
+    (:mod:`orbatt.core.mode_events`, which the model's ``NO_SWITCHES`` flag does not turn off) -
+    at most :data:`MAX_SWITCHES` in all."""
+    nseq = sequence_count(terms, params)
+    nfac = min(switch_count(terms, params), MAX_SWITCHES - nseq)
+    return nfac + nseq, nfac
+
+
+@jit
+def loop_switch_values(s, y, inertia, terms, params, table, work, out, nfac):
+    """The step loop's switching functions (:func:`loop_switches`) at ``s`` and the whole state
+    ``y`` (principal moments ``inertia``) into ``out``: the terms' first ``nfac``, then the
+    continuous mode sequences'. Returns their number."""
+    n = 0
+    if nfac > 0:
+        n = switch_values(s, y, terms, params, table, work, out[:nfac])
+    return n + mode_values(s, y, inertia, terms, params, table, work, out[nfac:])
 
 
 @jit
@@ -225,27 +249,31 @@ def crossed(work, g, n):
 
 @jit
 def _hermite_q(theta, hh, y0, f0, y1, f1, qt):
-    """``q`` at the fraction ``theta`` of the step ``hh`` on the cubic Hermite interpolant of
-    the step's ends ``(y0, f0)``, ``(y1, f1)`` (``f = dy/ds``), into ``qt``."""
+    """The state (``qt``'s length of components: ``q`` and what follows) at the fraction
+    ``theta`` of the step ``hh`` on the cubic Hermite interpolant of the step's ends ``(y0,
+    f0)``, ``(y1, f1)`` (``f = dy/ds``), into ``qt``."""
     t2 = theta * theta
     t3 = t2 * theta
     h00 = 2.0 * t3 - 3.0 * t2 + 1.0
     h10 = t3 - 2.0 * t2 + theta
     h01 = 3.0 * t2 - 2.0 * t3
     h11 = t3 - t2
-    for i in range(4):
+    for i in range(qt.shape[0]):
         qt[i] = h00 * y0[i] + h01 * y1[i] + hh * (h10 * f0[i] + h11 * f1[i])
 
 
 @jit
-def locate(s, hh, y0, f0, y1, f1, g, n, terms, params, table, work, scratch):
+def locate(s, hh, y0, f0, y1, f1, g, n, nfac, inertia, terms, params, table, work, scratch):
     """``(theta, k)``: the earliest root, as a fraction of the step ``[s, s + hh]``, of the
-    armed functions that changed sign (reference ``work[SWITCH_SLOT + k]`` at ``s``, ``g[k]`` at
-    ``s + hh``), on the cubic Hermite interpolant of ``q`` (:func:`_hermite_q`), by Illinois'
-    regula falsi; ``(1, -1)`` if none. ``theta`` is the bracket's end past the root (the
-    function has its new sign there, or is 0). ``scratch``: at least ``n + 4`` floats."""
-    qt = scratch[:4]
-    gt = scratch[4:]
+    armed functions (:func:`loop_switch_values`, ``nfac`` of the terms) that changed sign
+    (reference ``work[SWITCH_SLOT + k]`` at ``s``, ``g[k]`` at ``s + hh``), on the cubic Hermite
+    interpolant of the state (:func:`_hermite_q`: ``q``, and the rest for a mode sequence's
+    conditions), by Illinois' regula falsi; ``(1, -1)`` if none. ``theta`` is the bracket's end
+    past the root (the function has its new sign there, or is 0). ``scratch``: at least
+    ``len(y0) + n`` floats."""
+    nc = y0.shape[0]
+    qt = scratch[:nc]
+    gt = scratch[nc:]
     best = 1.0
     kbest = -1
     for k in range(n):
@@ -268,7 +296,7 @@ def locate(s, hh, y0, f0, y1, f1, g, n, terms, params, table, work, scratch):
             if x >= best:  # only an earlier root matters: is there one before the best?
                 x = best
             _hermite_q(x, hh, y0, f0, y1, f1, qt)
-            switch_values(s + x * hh, qt, terms, params, table, work, gt)
+            loop_switch_values(s + x * hh, qt, inertia, terms, params, table, work, gt, nfac)
             gx = gt[k]
             if gx != gx:  # the function vanished inside: no root of it there
                 a = b = 1.0

@@ -13,6 +13,7 @@ from ..core import control as kc
 from ..core import dop853 as kd
 from ..core import gyrostat as kg
 from ..core import kepler as kk
+from ..core import mode_events as kme
 from ..core import model as km
 from ..core import potentials as kp
 from ..core import switches as ksw
@@ -157,6 +158,9 @@ class DOP853(Method):
                 kg.has_ticks(self.kernel.terms, self.kernel.params):
             for e in range(E):
                 kg.tick(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], True)
+                # a mode sequence without a period takes its first mode's conditions as they are
+                kme.advance(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], -1, False,
+                            ksw.REARM, True)
             self.y_start = self.Y.copy()
         if p.step_ends:
             self.rec_t = np.empty(256)
@@ -353,6 +357,10 @@ class DOP853Lanes(DOP853):
         self.lanes = int(lanes)
 
     def start(self, problem):
+        if kme.sequence_count(problem.kernel.terms, problem.kernel.params):
+            raise InputError(f"method: {self.name!r} steps its members in lockstep and does not locate a mode "
+                             "sequence's transitions without a period (each member's own instant); give "
+                             "method = 'dop853' (members one by one), or a [control] period")
         super().start(problem)
         nsw = ksw.switch_count(self.kernel.terms, self.kernel.params)
         if nsw and problem.members > 1:

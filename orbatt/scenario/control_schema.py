@@ -188,11 +188,9 @@ def _mode_sequence(ctx, c, data, orbit, wheels, out):
         if key not in ("modes", "period"):
             raise ctx.error(f"[control] {key}", "not read with [[control.modes]]: give each mode its law's keys in its "
                                                 "[[control.modes]] table (the period is the flight software's, here)")
-    if "period" not in c:
-        raise ctx.error("[control] period", "missing; a mode sequence needs the flight software's period (its "
-                                            "transitions are decided at its ticks), e.g. period = '1 s'")
     seq = LAWS["modes"]
-    period = _law_settings(ctx, seq, {"period": c["period"]})["period"]
+    # without a period the laws are continuous and the transitions located on the solution
+    period = _law_settings(ctx, seq, {"period": c["period"]})["period"] if "period" in c else None
     raw = c["modes"]
     if not isinstance(raw, list) or not raw or not all(isinstance(m, dict) for m in raw):
         raise ctx.error("[[control.modes]]", "must be a non-empty array of tables ([[control.modes]] ...)")

@@ -93,8 +93,9 @@ def markdown() -> str:
                 lines += _table(((k, KEY_DOCS[sub][k]) for k in KEY_DOCS[sub]), sub) + [""]
         if table == "control":
             lines += ["### `[[control.modes]]`", "", "A sequence of modes run by the flight software (instead of "
-                      "`law`; needs `period`): each mode's law acts until its condition holds at a tick, then the "
-                      "next's (`docs/flight-software.md`).", ""]
+                      "`law`): each mode's law acts until its condition holds, then the next's; with `[control] "
+                      "period` the condition is checked at the ticks, without it the laws are continuous and each "
+                      "transition is located at the instant its condition is met (`docs/flight-software.md`).", ""]
             lines += _table(((k, KEY_DOCS["control.modes"][k]) for k in KEY_DOCS["control.modes"]),
                             "control.modes") + [""]
     lines += ["## `[sweep]`", "", "Optional: many cases run by `orbatt sweep` (manual: `docs/sweeps.md`); "
