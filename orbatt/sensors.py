@@ -133,6 +133,7 @@ class StarTracker:
                                           allow_none=True)
         self.earth_exclusion = scalar_value(earth_exclusion, u.rad, "star_tracker earth_exclusion",
                                             nonnegative=True, allow_none=True)
+        self.per_axis = None
         self.misalignment = np.zeros(3) if misalignment is None else _vector(misalignment, u.rad,
                                                                               "star_tracker misalignment")
         if np.linalg.norm(self.misalignment) > math.pi:
@@ -149,7 +150,10 @@ class StarTracker:
 
     def sigma(self):
         """The 1-sigma noise per body axis (rad): ``noise`` across the boresight, ``noise_roll``
-        about the body axis nearest it."""
+        about the body axis nearest it; per principal axis for the copy in the principal frame
+        of a full inertia tensor (its ``per_axis``, :func:`orbatt.frame_boundary.principal_navigation`)."""
+        if self.per_axis is not None:
+            return np.array(self.per_axis, dtype=np.float64)
         s = np.full(3, self.noise)
         s[int(np.argmax(np.abs(self.boresight)))] = self.noise_roll
         return s
