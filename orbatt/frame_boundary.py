@@ -13,19 +13,33 @@ The change is made once per run, here, and nowhere else:
   or relative to the orbital frame: ``target_q r``; the default orbital target, the identity,
   becomes ``r``). Initial rates, ``euler_313`` and frames of ``[initial]`` are taken in ``B`` by
   :class:`orbatt.State` (``State.from_omega`` of a tensor body: ``g = I_B omega + h``).
+* **limits per body axis** (a PD law's ``max_torque``, ideal or on wheels; the magnetorquers'
+  ``max_dipole``; B-dot's ``max_dipole``; dumping's ``dump_max_dipole``) clip each axis of ``B``:
+  the law's copy in ``P`` carries ``limit_axes = R``, its rows the slots
+  :data:`orbatt.core.control.LIMIT_FRAME`, and the kernels clip ``R^T clip(R v_P)``; a PD law's
+  integral is then held in ``B`` components (its anti-windup gate per body axis).
+* **sensors and the filter** (:func:`principal_navigation`): the gyro's and the magnetometer's
+  biases, the star tracker's boresight and misalignment turn by ``R^T``; the noise is drawn per
+  axis of ``P``: for isotropic noise (the gyro's, the magnetometer's, the Sun sensor's, the
+  filter's initial errors, a star tracker with ``noise_roll = noise``) the same distribution as
+  per body axis, but not the same realization as a principal-axes run of the same seed. A star
+  tracker's ``noise_roll`` (about the body axis nearest the boresight, as without a tensor) is
+  kept when that body axis is principal (``R^T diag(sigma^2) R`` diagonal to
+  :data:`NOISE_DIAGONAL`), else refused.
 * **out**: the :class:`~orbatt.trajectory.Trajectory` holds ``q_B = q_P r~`` and ``Q_B = Q_P
   r~`` and the user's body, potential and law (:func:`body_trajectory`); the Dataset
   (:func:`principal_trajectory` to compute with the kernels, then :func:`body_variables`)
   turns every body-axes variable (``frame = "B"``: ``omega``, ``g``, the torques, ``wheel_axis``,
-  ``dipole_control`` ...) back with ``R``, and the attitude family (``q``, ``Q``,
-  ``q_orbital``, the Euler angles) with ``r~``; it records ``inertia_tensor`` (``B``) and
-  ``principal_axes`` (``R``) beside the principal moments ``inertia``.
+  ``dipole_control``, ``knowledge_error``, ``bias_estimate``, ``gyro_bias``, ``gyro_measurement``
+  ...) back with ``R``, and the attitude family (``q``, ``Q``, ``q_orbital``, ``q_estimate``, the
+  Euler angles) with ``r~``; ``knowledge_sigma`` is made in ``B`` from ``R P_att R^T``
+  (:func:`orbatt.dataset.navigation.navigation_variables`); it records ``inertia_tensor``
+  (``B``) and ``principal_axes`` (``R``) beside the principal moments ``inertia``.
 
-What cannot be moved to ``P`` without changing the kernels is refused: limits applied per body
-axis (a PD law's ``max_torque``, B-dot's and dumping's per-axis dipole limits) clip along the
-axes of ``P`` in the kernels, which differ from ``B``'s. A diagonal tensor has no frame
-(``RigidBody.frame`` None): nothing here touches its run, which stays bit for bit the
-principal-axes run.
+A diagonal tensor has no frame (``RigidBody.frame`` None): nothing here touches its run, which
+stays bit for bit the principal-axes run. A law of a tensor body without a finite per-axis
+limit gets no limit frame in its row (``framed = 0``): the arithmetic it had before. The held commands of a run (``Trajectory.command``) stay in ``P`` (a PD law's
+integral with a limit frame: in ``B``).
 """
 from __future__ import annotations
 

@@ -173,3 +173,23 @@ def test_momentum_dumping_clips_each_body_axis():
                           atol=1e-12)
     ds = orbatt.to_dataset(tr)
     _within_and_reaching(ds["dipole_control"].values, mmax, "dipole_control")
+
+
+def test_a_mode_sequence_clips_each_body_axis_in_every_mode():
+    """B-dot for 300 s, then the PD law on an ideal torque, at 1 s: each mode's law (a copy
+    in the principal frame) clips along the body axes: the dipole of the first mode and the
+    torque of the second stay within their limits per body axis and reach them."""
+    from orbatt.modes import Mode, ModeSequence
+
+    mmax, t_end = 0.05, 600.0
+    seq = ModeSequence([Mode("detumble", orbatt.BDotControl("2e5 A m2 s / T", mmax * u.A * u.m**2, period=1 * u.s),
+                             until_time=300 * u.s),
+                        Mode("hold", _pd(period=1 * u.s))], period=1 * u.s)
+    body = _body()
+    st = orbatt.State.from_omega(body, Q0, np.radians([3.0, -2.0, 1.5]) * u.rad / u.s)
+    tr = orbatt.propagate(body, st, _environment(seq, t_end), np.arange(0.0, t_end + 1e-9, 5.0), method="dop853",
+                          rtol=1e-10, atol=1e-12)
+    ds = orbatt.to_dataset(tr)
+    mode = ds["mode"].values
+    _within_and_reaching(ds["dipole_control"].values[mode == 0], mmax, "dipole_control")
+    _within_and_reaching(ds["torque_control"].values[mode == 1], TMAX, "torque_control")

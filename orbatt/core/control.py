@@ -2,7 +2,9 @@
 
 Units are the caller's consistent system (orbatt's internal kg, km, s, rad: torques in
 kg km^2 s^-2 = 1e6 N m, dipoles in 1e-6 A m^2 so that ``m x B`` with ``B`` in T is such a
-torque). Vectors are 3-tuples in **body axes** unless named ``_s`` (inertial).
+torque). Vectors are 3-tuples in **body axes** unless named ``_s`` (inertial): the principal
+axes ``P`` of a full inertia tensor, whose per-axis limits clip along the user's axes ``B``
+(the rows' :data:`LIMIT_FRAME`, :func:`clip_in_body_axes`).
 
 Parameter layouts (rows of the term list, :mod:`orbatt.core.model`)
 ----------------------------------------------------------------
@@ -52,7 +54,7 @@ import math
 import numpy as np
 
 from ._jit import jit_inline
-from .qalg import cross, qconj, qmul, rotate_inv
+from .qalg import cross, mat_t_vec, mat_vec, qconj, qmul, rotate_inv
 from .slots import Slots
 
 #: PD targets
@@ -66,8 +68,8 @@ ACTUATOR_IDEAL, ACTUATOR_WHEELS, ACTUATOR_MAGNETORQUERS = 0, 1, 2
 FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1), ("mode", 1))
 #: the slots of a law that clips per axis (issue 32 item 6): ``framed`` (1: the body frame ``B`` of a
 #: full inertia tensor differs from the principal frame ``P`` the kernels integrate in; 0: it does
-#: not, and the law takes the arithmetic it always took) and ``axes``, the matrix ``R`` (row-major,
-#: ``x_B = R x_P``) along whose ``B`` axes the limits clip (:func:`clip_in_body_axes`)
+#: not: the arithmetic it always took) and ``axes``, the matrix ``R`` (row-major, ``x_B = R x_P``)
+#: along whose ``B`` axes the limits clip (:func:`clip_in_body_axes`)
 LIMIT_FRAME = (("framed", 1), ("axes", 9))
 #: the parameter layouts (module docstring): one wheel, the PD law, B-dot
 WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1), ("coulomb", 1), ("viscous", 1), ("width", 1))
@@ -210,29 +212,12 @@ def clip(x, limit):
 
 
 @jit_inline
-def to_body_axes(params, a, v):
-    """``R v``: the components in ``B`` of the vector ``v`` given in ``P`` (``R`` row-major at
-    ``params[a:a + 9]``, :data:`LIMIT_FRAME`)."""
-    return (params[a] * v[0] + params[a + 1] * v[1] + params[a + 2] * v[2],
-            params[a + 3] * v[0] + params[a + 4] * v[1] + params[a + 5] * v[2],
-            params[a + 6] * v[0] + params[a + 7] * v[1] + params[a + 8] * v[2])
-
-
-@jit_inline
-def to_principal_axes(params, a, v):
-    """``R^T v``: the components in ``P`` of the vector ``v`` given in ``B``."""
-    return (params[a] * v[0] + params[a + 3] * v[1] + params[a + 6] * v[2],
-            params[a + 1] * v[0] + params[a + 4] * v[1] + params[a + 7] * v[2],
-            params[a + 2] * v[0] + params[a + 5] * v[1] + params[a + 8] * v[2])
-
-
-@jit_inline
 def clip_in_body_axes(v, limit, params, a):
     """The vector ``v`` (``P`` components) with each of its ``B`` components clipped to
     ``limit``, in ``P`` components: ``R^T clip(R v)`` (a full inertia tensor's per-body-axis
     limit; ``R`` at ``params[a]``)."""
-    b = to_body_axes(params, a, v)
-    return to_principal_axes(params, a, (clip(b[0], limit), clip(b[1], limit), clip(b[2], limit)))
+    b = mat_vec(params, a, v)
+    return mat_t_vec(params, a, (clip(b[0], limit), clip(b[1], limit), clip(b[2], limit)))
 
 
 @jit_inline
@@ -405,12 +390,12 @@ def pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y):
         a = p0 + _PD_AXES
         if ki > 0.0:  # the integral is held in B components (its anti-windup gate acts per body axis)
             zi = int(params[p0 + _PD_ZI])
-            s = to_principal_axes(params, a, (y[zi], y[zi + 1], y[zi + 2]))
+            s = mat_t_vec(params, a, (y[zi], y[zi + 1], y[zi + 2]))
             t0 -= ki * s[0]
             t1 -= ki * s[1]
             t2 -= ki * s[2]
         raw = (t0, t1, t2)
-        return clip_in_body_axes(raw, tmax, params, a), to_body_axes(params, a, raw), to_body_axes(params, a, e)
+        return clip_in_body_axes(raw, tmax, params, a), mat_vec(params, a, raw), mat_vec(params, a, e)
     if ki > 0.0:
         zi = int(params[p0 + _PD_ZI])
         t0 -= ki * y[zi]
