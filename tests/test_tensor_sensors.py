@@ -143,10 +143,11 @@ def test_a_diagonal_tensor_with_sensors_is_bitwise_the_principal_run():
 
 
 def test_a_scenario_with_a_tensor_sensors_and_limits_runs_in_the_body_frame():
-    """The shipped wheel slew with a gyro, a star tracker and the MEKF, its inertia a full
-    tensor (products of inertia 3, -2, 1 g m^2): the scenario runs; the law on the estimate
+    """The shipped wheel slew (without its rate limit, so that max_torque acts) with a gyro, a
+    star tracker and the MEKF, its inertia a full tensor (products of inertia 3, -2, 1 g m^2):
+    the scenario runs; the law on the estimate
     keeps the torque within max_torque on each body axis and reaches it, the knowledge error
-    stays within 3 knowledge_sigma (after 10 s), and the slew ends within 1 deg of its target."""
+    stays within 3 knowledge_sigma once the slew is over (after 60 s), and the slew ends within 1 deg of its target."""
     import re
 
     from orbatt.scenario import Scenario, parse
@@ -174,13 +175,14 @@ bias_sigma = "10 deg/h"
     text = text.replace('inertia = ["0.13 kg m2", "0.11 kg m2", "0.05 kg m2"]',
                         'inertia = ["0.13 kg m2", "0.11 kg m2", "0.05 kg m2", "0.003 kg m2", "-0.002 kg m2", '
                         '"0.001 kg m2"]', 1)
-    text = re.sub(r't_end = "[^"]*"', 't_end = "150 s"', text)
+    text = re.sub(r't_end = "[^"]*"', 't_end = "150 s"', text).replace('max_rate = "1 deg/s"\n', "", 1)
     sc = Scenario(parse(text, "tensor-slew.toml"))
     assert sc.body.frame is not None
     ds = sc.run()
     tau = ds["torque_control"].values
     assert np.abs(tau).max() <= 1.5e-3 * (1 + 1e-9) and np.abs(tau).max() >= 1.5e-3 * (1 - 1e-9)
-    e, sig = ds["knowledge_error"].values[10:], ds["knowledge_sigma"].values[10:]
+    e, sig = ds["knowledge_error"].values[60:], ds["knowledge_sigma"].values[60:]  # (through the 7.7 deg/s slew
+    # the held rate's error exceeds the filter's model, with principal moments as well)
     assert np.all(np.mean(np.abs(e) <= 3 * sig, axis=0) >= 0.97)
     target = np.array([0.7071067811865476, 0.0, 0.0, 0.7071067811865476])
     assert float(qt.angle_between(ds["q"].values[-1], target)) < np.radians(1.0)
