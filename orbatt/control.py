@@ -250,7 +250,9 @@ class PDControl:
     kd : Quantity (N m s)
         Torque per unit rate error (rad/s).
     max_torque : Quantity (N m), optional
-        Per-axis saturation of the commanded torque.
+        Per-axis saturation of the commanded torque (each body axis; with a full inertia tensor
+        the axes of its body frame, not its principal axes: :mod:`orbatt.frame_boundary`; so
+        are ``max_dipole`` and ``dump_max_dipole``).
     actuator : {"ideal", "wheels", "magnetorquers"}
         An ideal external torque, the body's reaction wheels (their axes must span three
         dimensions; their limits apply), or magnetorquers: the dipole ``m = (B x tau) / |B|^2``
@@ -483,7 +485,7 @@ class BDotControl:
     ----------
     gain : Quantity (A m^2 s / T)
     max_dipole : Quantity (A m^2)
-        The magnetorquers' limit per axis.
+        The magnetorquers' limit per body axis (with a full inertia tensor: its body frame's).
     period : Quantity (time), optional
         The flight software's period: the dipole is computed at the ticks ``k period`` and held
         until the next (zero-order hold; the torque ``m x B(t)`` follows the field). Default:

@@ -109,7 +109,10 @@ class StarTracker:
         1-sigma noise about the boresight.
     boresight : 3 floats, optional
         The unit boresight in body axes; default ``[0, 0, 1]``. The noise's axes are the body
-        axes; ``noise_roll`` is about the body axis nearest the boresight.
+        axes; ``noise_roll`` is about the body axis nearest the boresight. A body given by a full
+        inertia tensor runs the sensors in its principal axes, where the noise is drawn per axis:
+        a ``noise_roll`` other than ``noise`` needs that body axis to be a principal axis
+        (:func:`orbatt.frame_boundary.principal_navigation`).
     sun_exclusion, earth_exclusion : Quantity (angle), optional
         Exclusion half-angles from the boresight to the Sun (needs the orbit's epoch) and to
         the Earth's limb. Default: none.
