@@ -186,3 +186,40 @@ bias_sigma = "10 deg/h"
     assert np.all(np.mean(np.abs(e) <= 3 * sig, axis=0) >= 0.97)
     target = np.array([0.7071067811865476, 0.0, 0.0, 0.7071067811865476])
     assert float(qt.angle_between(ds["q"].values[-1], target)) < np.radians(1.0)
+
+
+def test_a_magnetometer_bias_given_in_b_is_the_principal_run_s_turned_bias():
+    """Gyro, magnetometer (bias 300, -200, 100 nT in B) and the MEKF on a tensor body in the
+    dipole field: the principal body with the bias turned by hand (R^T b) holds the same states
+    (to round-off), and the tensor run's knowledge error is R times the principal run's."""
+    from astropy.time import Time
+
+    from orbatt.environment.magnetic import DipoleField
+    from orbatt.sensors import Magnetometer
+
+    epoch = Time("2024-06-01T00:00:00", scale="utc")
+    orbit = orbatt.KeplerOrbit(6878.137 * u.km, 0.001, 60 * u.deg, 30 * u.deg, 0 * u.deg, epoch=epoch)
+    body = orbatt.RigidBody(TENSOR * u.kg * u.m**2)
+    f = body.frame
+
+    def run(b, q0, target, turn):
+        nav = Navigation(3, gyro=Gyro(10 * u.Hz, ARW, RRW, BIAS_B * u.deg / u.h),
+                         magnetometer=Magnetometer(1 * u.Hz, 100 * u.nT, [300.0, -200.0, 100.0] * u.nT),
+                         estimator=MEKF(0.1 * u.deg, 10 * u.deg / u.h))
+        if turn:  # the settings of B written in P by hand
+            nav.gyro.bias = nav.gyro.bias @ f.R
+            nav.magnetometer.bias = nav.magnetometer.bias @ f.R
+        law = _law(nav, target)
+        env = orbatt.EnvironmentTorques(orbit, 120 * u.s, gravity_gradient=False, magnetic_field=DipoleField(epoch),
+                                        control=law)
+        st = orbatt.State.from_omega(b, q0, [0.0, 0.0, 0.0] * u.rad / u.s)
+        tr = orbatt.propagate(b, st, env, np.arange(0.0, 120.5, 5.0), rtol=1e-10)
+        return tr, orbatt.to_dataset(tr)
+
+    tr_b, ds_b = run(body, Q0_B, (1.0, 0.0, 0.0, 0.0), False)
+    tr_p, ds_p = run(body.principal, qt.mul(Q0_B, f.r), f.r, True)
+    zb, zp = np.asarray(tr_b.command), np.asarray(tr_p.command)
+    assert np.abs(zb - zp).max() < 1e-12 * np.abs(zp).max()
+    want = ds_p["knowledge_error"].values @ f.R.T
+    assert np.abs(ds_b["knowledge_error"].values - want).max() <= 1e-9 * np.abs(want).max()
+    assert ds_b["vector_updates"].values.sum() > 0
