@@ -28,7 +28,8 @@ from .core import model as km
 from .errors import InputError
 
 __all__ = ["ReactionWheel", "PDControl", "BDotControl", "AXIS_TOLERANCE", "MAX_WHEELS", "wheels_row",
-           "wheel_axes_span", "reaction_wheel", "scalar_value", "flight_period", "PERIOD_RANGE", "command_slots"]
+           "wheel_axes_span", "reaction_wheel", "scalar_value", "flight_period", "PERIOD_RANGE", "command_slots",
+           "limit_axes"]
 
 #: a wheel axis or a Sun-pointing axis must have |a| = 1 within this
 AXIS_TOLERANCE = 1e-6
@@ -195,6 +196,19 @@ def _location(loc):
     return (lat, lon, h)
 
 
+def limit_axes(law):
+    """The principal axes ``R`` (``x_B = R x_P``) of a full inertia tensor along whose body axes
+    the per-axis limits of ``law`` clip, or None (the law's axes are the body axes): the
+    attribute ``limit_axes`` that :func:`orbatt.frame_boundary.principal_control` gives the law's
+    copy in the principal frame."""
+    return getattr(law, "limit_axes", None)
+
+
+def _axes_key(law):
+    axes = limit_axes(law)
+    return None if axes is None else np.asarray(axes, dtype=np.float64).tobytes()
+
+
 def command_slots(period, wheels):
     """The flight-software slots of a law's kernel row (:func:`orbatt.core.control.flight_software`):
     its ``period`` in s (None: continuous, 0), ticks from ``t = 0``, and its held command after
@@ -236,7 +250,9 @@ class PDControl:
     kd : Quantity (N m s)
         Torque per unit rate error (rad/s).
     max_torque : Quantity (N m), optional
-        Per-axis saturation of the commanded torque.
+        Per-axis saturation of the commanded torque (each body axis; with a full inertia tensor
+        the axes of its body frame, not its principal axes: :mod:`orbatt.frame_boundary`; so
+        are ``max_dipole`` and ``dump_max_dipole``).
     actuator : {"ideal", "wheels", "magnetorquers"}
         An ideal external torque, the body's reaction wheels (their axes must span three
         dimensions; their limits apply), or magnetorquers: the dipole ``m = (B x tau) / |B|^2``
@@ -347,7 +363,9 @@ class PDControl:
                               U.to_kernel(self.kd, "torque_time"), tmax, values, axes,
                               max_rate=np.inf if self.max_rate is None else self.max_rate,
                               ki=0.0 if self.ki is None else U.to_kernel(self.ki, "torque"),
-                              magnetorquers=self.actuator == "magnetorquers", **command_slots(self.period, wheels))
+                              magnetorquers=self.actuator == "magnetorquers",
+                              axes=limit_axes(self) if tmax < np.inf or self.actuator == "magnetorquers" else None,
+                              **command_slots(self.period, wheels))
         return (km.PD_CONTROL, params, sun_table)
 
     def check_wheels(self, wheels):
@@ -388,7 +406,7 @@ class PDControl:
                tables("nadir") if self.target == "nadir" else None)
         # made once per set of wheels, settings and Sun table (~60 us): the settings are in the
         # key, so that a law changed after a run (law.kp = ...) is not run with its old row
-        key = (tuple(wheels), repr(sorted(self.settings().items())))
+        key = (tuple(wheels), repr(sorted(self.settings().items())), _axes_key(self))
         rows = self.__dict__.setdefault("_rows", {})
         hit = rows.get(key)
         if hit is None or hit[0] is not sun:
@@ -411,7 +429,7 @@ class PDControl:
             pd = rows[0][1]
             slots = dict(command_slots(self.period, wheels), z0=pd[kc.CTL_Z0] + pd[kc.CTL_NZ])
             rows.append((km.MOMENTUM_DUMP, kc.dump_params(self.dump_gain, U.to_kernel(self.dump_max_dipole, "dipole"),
-                                                          **slots), tables("field")))
+                                                          axes=limit_axes(self), **slots), tables("field")))
         return rows
 
     def describe(self):
@@ -467,7 +485,7 @@ class BDotControl:
     ----------
     gain : Quantity (A m^2 s / T)
     max_dipole : Quantity (A m^2)
-        The magnetorquers' limit per axis.
+        The magnetorquers' limit per body axis (with a full inertia tensor: its body frame's).
     period : Quantity (time), optional
         The flight software's period: the dipole is computed at the ticks ``k period`` and held
         until the next (zero-order hold; the torque ``m x B(t)`` follows the field). Default:
@@ -488,7 +506,7 @@ class BDotControl:
         ``wheels`` (its held dipole follows their momenta in the state)."""
         return (km.BDOT_CONTROL, kc.bdot_params(U.to_kernel(self.gain, "dipole_gain"),
                                                 U.to_kernel(self.max_dipole, "dipole"),
-                                                **command_slots(self.period, wheels)), field_table)
+                                                **command_slots(self.period, wheels), axes=limit_axes(self)), field_table)
 
     def check_wheels(self, wheels):
         """Nothing to refuse: the magnetorquers act whatever the wheels."""

@@ -13,19 +13,33 @@ The change is made once per run, here, and nowhere else:
   or relative to the orbital frame: ``target_q r``; the default orbital target, the identity,
   becomes ``r``). Initial rates, ``euler_313`` and frames of ``[initial]`` are taken in ``B`` by
   :class:`orbatt.State` (``State.from_omega`` of a tensor body: ``g = I_B omega + h``).
+* **limits per body axis** (a PD law's ``max_torque``, ideal or on wheels; the magnetorquers'
+  ``max_dipole``; B-dot's ``max_dipole``; dumping's ``dump_max_dipole``) clip each axis of ``B``:
+  the law's copy in ``P`` carries ``limit_axes = R``, its rows the slots
+  :data:`orbatt.core.control.LIMIT_FRAME`, and the kernels clip ``R^T clip(R v_P)``; a PD law's
+  integral is then held in ``B`` components (its anti-windup gate per body axis).
+* **sensors and the filter** (:func:`principal_navigation`): the gyro's and the magnetometer's
+  biases, the star tracker's boresight and misalignment turn by ``R^T``; the noise is drawn per
+  axis of ``P``: for isotropic noise (the gyro's, the magnetometer's, the Sun sensor's, the
+  filter's initial errors, a star tracker with ``noise_roll = noise``) the same distribution as
+  per body axis, but not the same realization as a principal-axes run of the same seed. A star
+  tracker's ``noise_roll`` (about the body axis nearest the boresight, as without a tensor) is
+  kept when that body axis is principal (``R^T diag(sigma^2) R`` diagonal to
+  :data:`NOISE_DIAGONAL`), else refused.
 * **out**: the :class:`~orbatt.trajectory.Trajectory` holds ``q_B = q_P r~`` and ``Q_B = Q_P
   r~`` and the user's body, potential and law (:func:`body_trajectory`); the Dataset
   (:func:`principal_trajectory` to compute with the kernels, then :func:`body_variables`)
   turns every body-axes variable (``frame = "B"``: ``omega``, ``g``, the torques, ``wheel_axis``,
-  ``dipole_control`` ...) back with ``R``, and the attitude family (``q``, ``Q``,
-  ``q_orbital``, the Euler angles) with ``r~``; it records ``inertia_tensor`` (``B``) and
-  ``principal_axes`` (``R``) beside the principal moments ``inertia``.
+  ``dipole_control``, ``knowledge_error``, ``bias_estimate``, ``gyro_bias``, ``gyro_measurement``
+  ...) back with ``R``, and the attitude family (``q``, ``Q``, ``q_orbital``, ``q_estimate``, the
+  Euler angles) with ``r~``; ``knowledge_sigma`` is made in ``B`` from ``R P_att R^T``
+  (:func:`orbatt.dataset.navigation.navigation_variables`); it records ``inertia_tensor``
+  (``B``) and ``principal_axes`` (``R``) beside the principal moments ``inertia``.
 
-What cannot be moved to ``P`` without changing the kernels is refused: limits applied per body
-axis (a PD law's ``max_torque``, B-dot's and dumping's per-axis dipole limits) clip along the
-axes of ``P`` in the kernels, which differ from ``B``'s. A diagonal tensor has no frame
-(``RigidBody.frame`` None): nothing here touches its run, which stays bit for bit the
-principal-axes run.
+A diagonal tensor has no frame (``RigidBody.frame`` None): nothing here touches its run, which
+stays bit for bit the principal-axes run. A law of a tensor body without a finite per-axis
+limit gets no limit frame in its row (``framed = 0``): the arithmetic it had before. The held commands of a run (``Trajectory.command``) stay in ``P`` (a PD law's
+integral with a limit frame: in ``B``).
 """
 from __future__ import annotations
 
@@ -43,12 +57,8 @@ from .potentials import GravityGradient, HeavyTop, TorqueFree
 from .state import State
 from .torques import TERM_KEYWORDS, EnvironmentTorques, Facet
 
-__all__ = ["frame_of", "principal_run", "principal_potential", "principal_control", "body_trajectory",
-           "principal_trajectory", "body_variables"]
-
-_FIX = ("or give [body] inertia as principal moments in principal axes (the body frame's limits then lie "
-        "along them)")
-
+__all__ = ["frame_of", "principal_run", "principal_potential", "principal_control", "principal_navigation",
+           "body_trajectory", "principal_trajectory", "body_variables", "NOISE_DIAGONAL"]
 
 def frame_of(bodies):
     """The :class:`~orbatt.body_frame.BodyFrame` shared by ``bodies`` (a RigidBody or a list),
@@ -64,21 +74,20 @@ def frame_of(bodies):
     return f
 
 
-def _refuse(key, what):
-    raise InputError(f"{key}: {what} clips each body axis, but with a full [body] inertia tensor (not diagonal) "
-                     "orbatt integrates in the tensor's principal axes and its kernels clip along those; leave "
-                     f"{key.split()[-1]} out, {_FIX}")
-
-
 def principal_control(law, frame):
     """``law`` (PDControl, BDotControl, ModeSequence or None) with its body-fixed settings in
-    ``P`` (module docstring); ``law`` itself when ``frame`` is None."""
+    ``P`` and its sensors' (:func:`principal_navigation`), marked with the axes its per-axis
+    limits clip along (module docstring); ``law`` itself when ``frame`` is None."""
     if frame is None or law is None:
         return law
-    if getattr(law, "navigation", None) is not None:  # (issue 33) sensors' axes and noise per body axis
-        raise InputError("[sensors]: the sensors' axes (boresight, noise and bias per body axis) and the filter's "
-                         "outputs are not turned into the principal frame of a full [body] inertia tensor yet; give "
-                         "[body] inertia as principal moments in principal axes")
+    out = _principal_law(law, frame)
+    navigation = getattr(law, "navigation", None)
+    if navigation is not None:
+        out.navigation = principal_navigation(navigation, frame)
+    return out
+
+
+def _principal_law(law, frame):
     if isinstance(law, ModeSequence):
         out = copy.copy(law)
         out.modes = []
@@ -87,26 +96,73 @@ def principal_control(law, frame):
             mm.law = principal_control(m.law, frame)
             out.modes.append(mm)
         return out
-    if isinstance(law, BDotControl):
-        _refuse("[control] max_dipole", "B-dot's per-axis dipole limit")
-    if not isinstance(law, PDControl):
+    if not isinstance(law, (PDControl, BDotControl)):
         raise InputError(f"control: {type(law).__name__} is not known to orbatt.frame_boundary, which turns a law's "
                          "body-fixed settings into the principal frame of a full inertia tensor; give the inertia as "
                          "principal moments")
-    if getattr(law, "actuator", None) == "magnetorquers":
-        _refuse("[control] max_dipole", "the magnetorquers' per-axis dipole limit")
-    if law.max_torque is not None:
-        _refuse("[control] max_torque", "the PD law's torque limit")
-    if law.dump_gain is not None:
-        _refuse("[control] dump_max_dipole", "momentum dumping's per-axis dipole limit")
     out = copy.copy(law)
     out.__dict__.pop("_rows", None)
+    out.limit_axes = frame.R  # max_torque, max_dipole, dump_max_dipole clip along B's axes (orbatt.core.control)
+    if isinstance(law, BDotControl):
+        return out
     if law.target_axis is not None:
         out.target_axis = frame.to_principal(law.target_axis)
     elif law.target not in ("sun", "ground"):  # an attitude target (inertial, or relative to a frame)
         tq = law.target_q if law.target_q is not None else np.array([1.0, 0.0, 0.0, 0.0])
         out.target_q = frame.attitude_to_principal(tq)
     return out
+
+
+#: how close to diagonal (relative to its largest entry) the star tracker's noise covariance must
+#: be in ``P`` for the kernel, which draws and weighs it per axis
+NOISE_DIAGONAL = 1e-12
+
+
+def principal_navigation(navigation, frame):
+    """A copy of the :class:`~orbatt.sensors.Navigation` ``navigation`` in ``P`` (module
+    docstring): the gyro's and the magnetometer's biases, the star tracker's boresight and
+    misalignment turned by ``R^T``, the star tracker's noise per principal axis, and ``axes``
+    (``R``), with which the Dataset turns the filter's covariance back to ``B``.
+
+    Raises
+    ------
+    InputError
+        A star tracker whose noise about the boresight (``noise_roll``) differs from ``noise``
+        while the body axis it acts about is not a principal axis: its covariance is not
+        diagonal in ``P``, and the kernel draws the noise per axis.
+    """
+    out = copy.copy(navigation)
+    out.axes = frame.R
+    if navigation.gyro is not None:
+        out.gyro = copy.copy(navigation.gyro)
+        out.gyro.bias = frame.to_principal(navigation.gyro.bias)
+    if navigation.magnetometer is not None:
+        out.magnetometer = copy.copy(navigation.magnetometer)
+        out.magnetometer.bias = frame.to_principal(navigation.magnetometer.bias)
+    st = navigation.star_tracker
+    if st is not None:
+        out.star_tracker = copy.copy(st)
+        out.star_tracker.boresight = frame.to_principal(st.boresight)
+        out.star_tracker.misalignment = frame.to_principal(st.misalignment)
+        out.star_tracker.per_axis = _principal_sigma(st, frame)
+    return out
+
+
+def _principal_sigma(st, frame):
+    """The star tracker's 1-sigma noise per principal axis: its body axes' (isotropic: the same
+    values), or the diagonal of ``R^T diag(sigma^2) R`` when that is diagonal."""
+    sigma = st.sigma()
+    if st.noise_roll == st.noise:
+        return sigma
+    cov = frame.R.T @ np.diag(sigma ** 2) @ frame.R
+    off = np.abs(cov - np.diag(np.diag(cov))).max()
+    if off > NOISE_DIAGONAL * np.abs(cov).max():
+        raise InputError(f"[sensors.star_tracker] noise_roll: {st.noise_roll:.6g} rad differs from noise = "
+                         f"{st.noise:.6g} rad about body axis {int(np.argmax(np.abs(st.boresight))) + 1}, which is not a "
+                         "principal axis of the full [body] inertia tensor; orbatt integrates in the principal axes "
+                         "and draws the star tracker's noise per principal axis; give noise_roll = noise (isotropic "
+                         "noise, the same in any axes), or a tensor one of whose principal axes is that body axis")
+    return np.sqrt(np.diag(cov))
 
 
 def principal_potential(potential, frame):
@@ -194,6 +250,11 @@ def principal_trajectory(tr):
                                q=frame.attitude_to_principal(tr.q), Q=frame.attitude_to_principal(tr.Q))
 
 
+#: body-axes variables made in B already: the tensor, and the filter's 1-sigma per body axis
+#: (the square root of the diagonal of R P R^T, :func:`orbatt.dataset.navigation.navigation_variables`)
+_IN_B = ("inertia_tensor", "knowledge_sigma")
+
+
 def _columns(a, b, c):
     return np.stack([a, b, c], axis=-1)
 
@@ -238,9 +299,9 @@ def body_variables(body, data, coords):
     def turned(variables):
         out = {}
         for name, var in variables.items():
-            if var.attrs.get("frame") == "B" and var.dims[-1:] == ("axis",) and name != "inertia_tensor":
+            if var.attrs.get("frame") == "B" and var.dims[-1:] == ("axis",) and name not in _IN_B:
                 var = Var(var.dims, frame.to_body(var.values), var.attrs)
-            elif name in ("q", "Q", "q_orbital"):
+            elif name in ("q", "Q", "q_orbital", "q_estimate"):
                 var = Var(var.dims, frame.attitude_to_body(var.values), var.attrs)
             out[name] = var
         return out

@@ -109,7 +109,10 @@ class StarTracker:
         1-sigma noise about the boresight.
     boresight : 3 floats, optional
         The unit boresight in body axes; default ``[0, 0, 1]``. The noise's axes are the body
-        axes; ``noise_roll`` is about the body axis nearest the boresight.
+        axes; ``noise_roll`` is about the body axis nearest the boresight. A body given by a full
+        inertia tensor runs the sensors in its principal axes, where the noise is drawn per axis:
+        a ``noise_roll`` other than ``noise`` needs that body axis to be a principal axis
+        (:func:`orbatt.frame_boundary.principal_navigation`).
     sun_exclusion, earth_exclusion : Quantity (angle), optional
         Exclusion half-angles from the boresight to the Sun (needs the orbit's epoch) and to
         the Earth's limb. Default: none.
@@ -133,6 +136,7 @@ class StarTracker:
                                           allow_none=True)
         self.earth_exclusion = scalar_value(earth_exclusion, u.rad, "star_tracker earth_exclusion",
                                             nonnegative=True, allow_none=True)
+        self.per_axis = None
         self.misalignment = np.zeros(3) if misalignment is None else _vector(misalignment, u.rad,
                                                                               "star_tracker misalignment")
         if np.linalg.norm(self.misalignment) > math.pi:
@@ -149,7 +153,10 @@ class StarTracker:
 
     def sigma(self):
         """The 1-sigma noise per body axis (rad): ``noise`` across the boresight, ``noise_roll``
-        about the body axis nearest it."""
+        about the body axis nearest it; per principal axis for the copy in the principal frame
+        of a full inertia tensor (its ``per_axis``, :func:`orbatt.frame_boundary.principal_navigation`)."""
+        if self.per_axis is not None:
+            return np.array(self.per_axis, dtype=np.float64)
         s = np.full(3, self.noise)
         s[int(np.argmax(np.abs(self.boresight)))] = self.noise_roll
         return s

@@ -2,7 +2,9 @@
 
 Units are the caller's consistent system (orbatt's internal kg, km, s, rad: torques in
 kg km^2 s^-2 = 1e6 N m, dipoles in 1e-6 A m^2 so that ``m x B`` with ``B`` in T is such a
-torque). Vectors are 3-tuples in **body axes** unless named ``_s`` (inertial).
+torque). Vectors are 3-tuples in **body axes** unless named ``_s`` (inertial): the principal
+axes ``P`` of a full inertia tensor, whose per-axis limits clip along the user's axes ``B``
+(the rows' :data:`LIMIT_FRAME`, :func:`clip_in_body_axes`).
 
 Parameter layouts (rows of the term list, :mod:`orbatt.core.model`)
 ----------------------------------------------------------------
@@ -52,7 +54,7 @@ import math
 import numpy as np
 
 from ._jit import jit_inline
-from .qalg import cross, qconj, qmul, rotate_inv
+from .qalg import cross, mat_t_vec, mat_vec, qconj, qmul, rotate_inv
 from .slots import Slots
 
 #: PD targets
@@ -64,11 +66,16 @@ ACTUATOR_IDEAL, ACTUATOR_WHEELS, ACTUATOR_MAGNETORQUERS = 0, 1, 2
 #: k period``), where its held command lies in the state (``z0``: ``y[z0:z0 + nz]``, after the
 #: wheels' momenta) and its size ``nz`` (0 for a continuous law)
 FLIGHT_SOFTWARE = (("period", 1), ("phase", 1), ("z0", 1), ("nz", 1), ("mode", 1))
+#: the slots of a law that clips per axis (issue 32 item 6): ``framed`` (1: the body frame ``B`` of a
+#: full inertia tensor differs from the principal frame ``P`` the kernels integrate in; 0: it does
+#: not: the arithmetic it always took) and ``axes``, the matrix ``R`` (row-major, ``x_B = R x_P``)
+#: along whose ``B`` axes the limits clip (:func:`clip_in_body_axes`)
+LIMIT_FRAME = (("framed", 1), ("axes", 9))
 #: the parameter layouts (module docstring): one wheel, the PD law, B-dot
 WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1), ("coulomb", 1), ("viscous", 1), ("width", 1))
 PD = Slots(*FLIGHT_SOFTWARE, ("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4),
-           ("max_rate", 1), ("ki", 1), ("zi", 1), tail="pinv")
-BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
+           ("max_rate", 1), ("ki", 1), ("zi", 1), *LIMIT_FRAME, tail="pinv")
+BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1), *LIMIT_FRAME)
 #: a mode sequence (:data:`~orbatt.core.model.MODES`, issue 32 item 4): its state ``y[z0:z0 + 4]``
 #: is ``(mode, entry time, time its conditions began to hold, whether they hold)``; ``count`` modes, then per mode the
 #: tail :data:`MODE_FIELDS`: leave after ``until_time`` in the mode, or once ``|omega| <
@@ -91,9 +98,22 @@ _W_AXIS, _W_IW, _W_UMAX, _W_SMAX = WHEEL.axis, WHEEL.iw, WHEEL.u_max, WHEEL.spee
 _W_COULOMB, _W_VISCOUS, _W_WIDTH = WHEEL.coulomb, WHEEL.viscous, WHEEL.width
 _PD_TARGET, _PD_KP, _PD_KD, _PD_TMAX, _PD_C, _PD_PINV = PD.target, PD.kp, PD.kd, PD.max_torque, PD.c, PD.pinv
 _PD_MAXRATE, _PD_KI, _PD_ZI = PD.max_rate, PD.ki, PD.zi
+_PD_FRAMED, _PD_AXES = PD.framed, PD.axes
 #: the slot of the PD law's actuator (``params[p0 + PD_ACTUATOR]``)
 PD_ACTUATOR = PD.actuator
 _BD_GAIN, _BD_MMAX = BDOT.gain, BDOT.max_dipole
+_BD_FRAMED, _BD_AXES = BDOT.framed, BDOT.axes
+
+
+def limit_frame(axes):
+    """The :data:`LIMIT_FRAME` slots: ``axes`` the ``(3, 3)`` matrix ``R`` of a full inertia
+    tensor's principal axes (``x_B = R x_P``), or None (``P = B``: ``framed = 0``)."""
+    if axes is None:
+        return dict(framed=0.0, axes=np.eye(3))
+    R = np.asarray(axes, dtype=np.float64)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)) or np.abs(R @ R.T - np.eye(3)).max() > 1e-12:
+        raise ValueError(f"axes: {R.tolist()} is not a rotation matrix")
+    return dict(framed=1.0, axes=R)
 
 
 def wheel_params(axes, inertia, max_torque, max_speed, coulomb=0.0, viscous=0.0, width=1.0):
@@ -134,7 +154,7 @@ def law_slots(nz, mode=-1):
 
 
 def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wheel_axes=None, period=0.0,
-              phase=0.0, z0=8, max_rate=np.inf, ki=0.0, magnetorquers=False):
+              phase=0.0, z0=8, max_rate=np.inf, ki=0.0, magnetorquers=False, axes=None):
     """The parameters of a :data:`~orbatt.core.model.PD_CONTROL` row. ``target``: one of
     the ``TARGET_*`` constants; ``target_values``:
     the target quaternion (relative to the orbital frame for ``TARGET_ORBITAL``; default
@@ -145,7 +165,10 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     none; needs ``kd > 0``); ``ki``: the integral gain (0: none), whose integral of the
     error (3) follows the held command in the state (``zi``); ``magnetorquers``: the torque is
     made by magnetorquers (:data:`ACTUATOR_MAGNETORQUERS`; the row is followed by its
-    :data:`MAGNETORQUER` row, :func:`magnetorquer_params`; the held command is the dipole, 3)."""
+    :data:`MAGNETORQUER` row, :func:`magnetorquer_params`; the held command is the dipole, 3);
+    ``axes``: the principal axes ``R`` of a full inertia tensor, along whose body axes
+    ``max_torque`` and the magnetorquers' limit clip (:data:`LIMIT_FRAME`; None: the row's axes
+    are the body axes)."""
     c = np.zeros(4)
     tv = np.asarray(target_values, dtype=np.float64).ravel()
     c[:tv.size] = tv
@@ -164,7 +187,7 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
                 actuator=(ACTUATOR_MAGNETORQUERS if magnetorquers else ACTUATOR_IDEAL if wheel_axes is None else
                           ACTUATOR_WHEELS), c=c,
                 max_rate=float(max_rate), ki=float(ki), **law_slots(ncmd + nint),
-                zi=fs["z0"] + ncmd if nint else -1.0, **fs)
+                zi=fs["z0"] + ncmd if nint else -1.0, **limit_frame(axes), **fs)
     if wheel_axes is None:
         return PD.pack(**head)
     A = np.asarray(wheel_axes, dtype=np.float64).reshape(-1, 3).T  # (3, n)
@@ -173,17 +196,28 @@ def pd_params(target, kp, kd, max_torque, target_values=(1.0, 0.0, 0.0, 0.0), wh
     return PD.pack(tail=np.linalg.pinv(A), **head)
 
 
-def bdot_params(gain, max_dipole, period=0.0, phase=0.0, z0=8):
+def bdot_params(gain, max_dipole, period=0.0, phase=0.0, z0=8, axes=None):
     """The parameters of a :data:`~orbatt.core.model.BDOT_CONTROL` row (:data:`BDOT`;
-    ``period, phase, z0``: :func:`flight_software`, the held command: the dipole, 3)."""
+    ``period, phase, z0``: :func:`flight_software`, the held command: the dipole, 3; ``axes``:
+    :func:`limit_frame`)."""
     fs = flight_software(period, phase, z0)
-    return BDOT.pack(gain=gain, max_dipole=max_dipole, **law_slots(3 if fs["period"] > 0 else 0), **fs)
+    return BDOT.pack(gain=gain, max_dipole=max_dipole, **law_slots(3 if fs["period"] > 0 else 0),
+                     **limit_frame(axes), **fs)
 
 
 @jit_inline
 def clip(x, limit):
     """``x`` limited to ``[-limit, limit]``."""
     return min(max(x, -limit), limit)
+
+
+@jit_inline
+def clip_in_body_axes(v, limit, params, a):
+    """The vector ``v`` (``P`` components) with each of its ``B`` components clipped to
+    ``limit``, in ``P`` components: ``R^T clip(R v)`` (a full inertia tensor's per-body-axis
+    limit; ``R`` at ``params[a]``)."""
+    b = mat_vec(params, a, v)
+    return mat_t_vec(params, a, (clip(b[0], limit), clip(b[1], limit), clip(b[2], limit)))
 
 
 @jit_inline
@@ -321,7 +355,10 @@ def pd_error(q, params, p0, r, xhat, v, aux, aux_rate):
 def pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y):
     """``(tau, raw, e)``: the PD law's commanded torque (body axes, each axis clipped to
     ``max_torque``), the same before the clip, and its attitude error (:func:`pd_error`), for
-    the attitude ``q`` and body rate ``omega``:
+    the attitude ``q`` and body rate ``omega``. A row with a limit frame (:data:`LIMIT_FRAME`,
+    ``framed``, and a finite ``max_torque``) clips along the body axes of ``B`` and returns
+    ``raw`` and ``e`` in ``B`` components, in which its integral ``y[zi:zi + 3]`` is held (the
+    anti-windup gate of each body axis then reads them as it reads a principal row's):
 
     * ``tau = -kp e - kd (omega - omega_t)`` (quaternion feedback);
     * with ``max_rate``: the rate-limited eigenaxis slew of Wie, Weiss & Arapostathis (1989),
@@ -349,6 +386,16 @@ def pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y):
         t1 = -kp * e[1] - kd * (omega[1] - wt[1])
         t2 = -kp * e[2] - kd * (omega[2] - wt[2])
     ki = params[p0 + _PD_KI]
+    if params[p0 + _PD_FRAMED] != 0.0 and tmax < np.inf:  # the limit along the body axes B of a tensor
+        a = p0 + _PD_AXES
+        if ki > 0.0:  # the integral is held in B components (its anti-windup gate acts per body axis)
+            zi = int(params[p0 + _PD_ZI])
+            s = mat_t_vec(params, a, (y[zi], y[zi + 1], y[zi + 2]))
+            t0 -= ki * s[0]
+            t1 -= ki * s[1]
+            t2 -= ki * s[2]
+        raw = (t0, t1, t2)
+        return clip_in_body_axes(raw, tmax, params, a), mat_vec(params, a, raw), mat_vec(params, a, e)
     if ki > 0.0:
         zi = int(params[p0 + _PD_ZI])
         t0 -= ki * y[zi]
@@ -425,13 +472,16 @@ def wheel_torques(tau, omega, y, params, pd0, wheels0, u):
 @jit_inline
 def bdot_dipole(q, omega, b_s, bdot_s, params, p0):
     """``(m, B_B)``: the B-dot dipole (body axes, each axis clipped to the row's
-    ``max_dipole``) and the field in body axes, from the field ``b_s`` and its rate ``bdot_s``
+    ``max_dipole``; along ``B``'s axes with a limit frame, :data:`LIMIT_FRAME`) and the field in body axes, from the field ``b_s`` and its rate ``bdot_s``
     along the orbit (inertial); the row's parameters at ``params[p0]`` (:data:`BDOT`)."""
     gain = params[p0 + _BD_GAIN]
     mmax = params[p0 + _BD_MMAX]
     b = rotate_inv(q, b_s)
     db = rotate_inv(q, bdot_s)
     wb = cross(omega, b)
+    if params[p0 + _BD_FRAMED] != 0.0:  # the limit along the body axes B of a tensor
+        m = (-gain * (db[0] - wb[0]), -gain * (db[1] - wb[1]), -gain * (db[2] - wb[2]))
+        return clip_in_body_axes(m, mmax, params, p0 + _BD_AXES), b
     return (clip(-gain * (db[0] - wb[0]), mmax), clip(-gain * (db[1] - wb[1]), mmax),
             clip(-gain * (db[2] - wb[2]), mmax)), b
 
@@ -442,22 +492,22 @@ def bdot_dipole(q, omega, b_s, bdot_s, params, p0):
 #: the layout of a :data:`~orbatt.core.model.MOMENTUM_DUMP` row (it follows the PD law's row
 #: on wheels): the flight-software slots (the law's period; its held dipole, 3, after the PD
 #: law's state), the gain ``k`` (1/s) and the magnetorquers' per-axis limit
-DUMP = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1))
+DUMP = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1), *LIMIT_FRAME)
 assert (DUMP.period, DUMP.phase, DUMP.z0, DUMP.nz) == (CTL_PERIOD, CTL_PHASE, CTL_Z0, CTL_NZ)
-_DU_GAIN, _DU_MMAX = DUMP.gain, DUMP.max_dipole
+_DU_GAIN, _DU_MMAX, _DU_FRAMED, _DU_AXES = DUMP.gain, DUMP.max_dipole, DUMP.framed, DUMP.axes
 
 
-def dump_params(gain, max_dipole, period=0.0, phase=0.0, z0=8):
+def dump_params(gain, max_dipole, period=0.0, phase=0.0, z0=8, axes=None):
     """The parameters of a :data:`~orbatt.core.model.MOMENTUM_DUMP` row (:data:`DUMP`): the
     gain ``k`` (1/s), the per-axis dipole limit (internal units), ``period, phase, z0``:
-    :func:`flight_software` (the held command: the dipole, 3)."""
+    :func:`flight_software` (the held command: the dipole, 3); ``axes``: :func:`limit_frame`."""
     if not (gain > 0.0 and np.isfinite(gain)):
         raise ValueError(f"gain: {gain!r} must be finite and positive")
     if not max_dipole > 0.0:
         raise ValueError(f"max_dipole: {max_dipole!r} must be positive")
     fs = flight_software(period, phase, z0)
     return DUMP.pack(gain=float(gain), max_dipole=float(max_dipole), **law_slots(3 if fs["period"] > 0 else 0),
-                     **fs)
+                     **limit_frame(axes), **fs)
 
 
 @jit_inline
@@ -480,7 +530,7 @@ def wheels_momentum(y, params, w0):
 @jit_inline
 def dump_dipole(h, b, params, p0):
     """The dumping dipole ``m = k (h x B) / |B|^2`` (body axes, each axis clipped to the row's
-    ``max_dipole``; :data:`DUMP` at ``params[p0]``) for the wheels' momentum ``h`` and the field
+    ``max_dipole``, along ``B``'s axes with a limit frame; :data:`DUMP` at ``params[p0]``) for the wheels' momentum ``h`` and the field
     ``b`` (body axes): unclipped, ``m x B = -k h_perp``, ``h_perp`` the part of ``h`` normal to
     ``B``. Zero in a zero field."""
     b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2]
@@ -489,6 +539,8 @@ def dump_dipole(h, b, params, p0):
     f = params[p0 + _DU_GAIN] / b2
     mmax = params[p0 + _DU_MMAX]
     c = cross(h, b)
+    if params[p0 + _DU_FRAMED] != 0.0:  # the limit along the body axes B of a tensor
+        return clip_in_body_axes((f * c[0], f * c[1], f * c[2]), mmax, params, p0 + _DU_AXES)
     return (clip(f * c[0], mmax), clip(f * c[1], mmax), clip(f * c[2], mmax))
 
 
@@ -527,3 +579,17 @@ def torque_dipole(tau, b, mmax):
         return (0.0, 0.0, 0.0)
     c = cross(b, tau)
     return (clip(c[0] / b2, mmax), clip(c[1] / b2, mmax), clip(c[2] / b2, mmax))
+
+
+@jit_inline
+def pd_dipole(tau, b, mmax, params, p0):
+    """:func:`torque_dipole` for the PD row at ``params[p0]``: its dipole clipped along the body
+    axes ``B`` of a tensor when the row has a limit frame (:data:`LIMIT_FRAME`), else exactly
+    :func:`torque_dipole`."""
+    if params[p0 + _PD_FRAMED] == 0.0:
+        return torque_dipole(tau, b, mmax)
+    b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2]
+    if not b2 > 0.0:
+        return (0.0, 0.0, 0.0)
+    c = cross(b, tau)
+    return clip_in_body_axes((c[0] / b2, c[1] / b2, c[2] / b2), mmax, params, p0 + _PD_AXES)

@@ -181,7 +181,7 @@ def control_torques(t, q, omega, y, terms, params, table, work, w0, u, r, xhat, 
                 app = vadd(app, tb)
             else:
                 if mtq:  # the part of the command normal to B: m x B
-                    m = ctl.torque_dipole(tau, b, mmax)
+                    m = ctl.pd_dipole(tau, b, mmax, params, p0)
                     tau = cross(m, b)
                 ext = vadd(ext, tau)
                 app = vadd(app, tau)
@@ -444,7 +444,7 @@ def tick(s, y, inertia, terms, params, table, work, start):
                 ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + wheel_count(params, w0)])
             elif params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_MAGNETORQUERS:  # the dipole, held
                 b, mmax = magnetorquer_field(j, t, q, terms, params, table, work)
-                m = ctl.torque_dipole(tau, b, mmax)
+                m = ctl.pd_dipole(tau, b, mmax, params, p0)
                 y[z0] = m[0]
                 y[z0 + 1] = m[1]
                 y[z0 + 2] = m[2]

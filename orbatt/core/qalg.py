@@ -94,3 +94,19 @@ def vadd(a, b):
 @jit_inline
 def cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@jit_inline
+def mat_vec(m, a, v):
+    """``M v`` for the 3x3 matrix ``M`` stored row-major at ``m[a:a + 9]`` (a row's parameters)."""
+    return (m[a] * v[0] + m[a + 1] * v[1] + m[a + 2] * v[2],
+            m[a + 3] * v[0] + m[a + 4] * v[1] + m[a + 5] * v[2],
+            m[a + 6] * v[0] + m[a + 7] * v[1] + m[a + 8] * v[2])
+
+
+@jit_inline
+def mat_t_vec(m, a, v):
+    """``M^T v`` for the 3x3 matrix ``M`` stored row-major at ``m[a:a + 9]``."""
+    return (m[a] * v[0] + m[a + 3] * v[1] + m[a + 6] * v[2],
+            m[a + 1] * v[0] + m[a + 4] * v[1] + m[a + 7] * v[2],
+            m[a + 2] * v[0] + m[a + 5] * v[1] + m[a + 8] * v[2])

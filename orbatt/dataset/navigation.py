@@ -9,6 +9,12 @@ estimate of its last tick ``t_k`` propagated to ``t`` with the rate it holds (``
 ``knowledge_error`` is the rotation vector of ``q_hat~ q`` (body axes: the rotation that turns
 the estimated body axes onto the true ones), ``knowledge_sigma`` the square root of the
 covariance's attitude diagonal held since ``t_k``.
+
+A body given by a full inertia tensor runs its filter in the principal frame ``P``
+(:func:`orbatt.frame_boundary.principal_navigation`): ``navigation.axes`` is then ``R``, and
+``knowledge_sigma`` is the square root of the diagonal of ``R P_att R^T`` (body axes; the
+other body-axes variables are turned by ``R`` at the boundary,
+:func:`orbatt.frame_boundary.body_variables`).
 """
 from __future__ import annotations
 
@@ -113,7 +119,9 @@ def navigation_variables(model, q, z, t, tdims, nwheels, navigation):
         data["knowledge_error"] = _var(vv, knowledge_error(q, qh), "rad",
                                        "rotation vector from the estimate to the truth (q = q_estimate dq)",
                                        frame="B")
-        diag = np.stack([P[..., 0], P[..., 7], P[..., 14]], axis=-1)
+        axes = getattr(navigation, "axes", None)  # a full inertia tensor's principal axes: P in B is R P R^T
+        diag = np.stack([P[..., 0], P[..., 7], P[..., 14]], axis=-1) if axes is None else np.einsum(
+            "ij,...jk,ik->...i", axes, P.reshape(P.shape[:-1] + (6, 6))[..., :3, :3], axes)
         data["knowledge_sigma"] = _var(vv, np.sqrt(np.maximum(diag, 0.0)), "rad",
                                        "filter's 1-sigma attitude uncertainty per axis", frame="B",
                                        comment="square root of the covariance's attitude diagonal, as held since "

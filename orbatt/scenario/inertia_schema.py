@@ -11,7 +11,8 @@ Three forms (quantities as everywhere, :func:`orbatt.scenario.fields.parse_quant
 
 The off-diagonal entries are the matrix's: ``I_xy = -∫ x y dm`` (products of inertia with their
 minus sign). A tensor that is not diagonal makes orbatt integrate in its principal frame while
-every body-fixed key (facets, wheels, dipole, constant torque, control axes, ``[initial]``) and
+every body-fixed key (facets, wheels, dipole, constant torque, control axes and per-axis limits,
+``[sensors]``, ``[initial]``) and
 every body-axes output stays in the body frame (:mod:`orbatt.body_frame`,
 :mod:`orbatt.frame_boundary`). Sweeps of such a scenario are refused (:func:`check_sweep`).
 """

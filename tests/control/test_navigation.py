@@ -389,14 +389,17 @@ def test_knowledge_indices_need_an_estimator(tmp_path):
         orbatt.load_scenario(p)
 
 
-def test_a_full_inertia_tensor_with_sensors_is_refused():
-    """The sensors' body axes are not turned into a tensor's principal frame yet: refused, named."""
+def test_a_star_tracker_roll_noise_off_the_principal_axes_is_refused():
+    """A full inertia tensor runs the sensors in its principal frame, where the kernel draws the
+    star tracker's noise per axis: noise_roll about a body axis that is not principal is refused,
+    named; isotropic noise runs (tests/test_tensor_sensors.py)."""
     R = qt.to_matrix(qt.normalize(np.array([0.9, 0.2, -0.1, 0.3])))
     tensor = R @ np.diag([0.03, 0.04, 0.02]) @ R.T * u.kg * u.m**2
     body = orbatt.RigidBody(tensor)
     state = orbatt.State.from_omega(body, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0] * u.rad / u.s)
-    with pytest.raises(InputError, match=r"\[sensors\].*principal"):
-        orbatt.propagate(body, state, orbatt.TorqueFree(), [0.0, 1.0], control=_idle_law(_nav()))
+    with pytest.raises(InputError, match=r"noise_roll.*not a principal axis"):
+        orbatt.propagate(body, state, orbatt.TorqueFree(), [0.0, 1.0],
+                         control=_idle_law(_nav(noise_roll=50 * u.arcsec)))
 
 
 def _vector_text(tmp_path, extra="", st='noise = "10 arcsec"\nearth_exclusion = "179 deg"', t_end="600 s"):
