@@ -15,6 +15,7 @@ from . import canonical as cn
 from .core import kernel_floats
 from .core import gyrostat as kg
 from .core import potentials as kp
+from .frame_boundary import principal_outputs
 from .methods.problem import kernel_spec
 from .units import from_kernel
 
@@ -25,7 +26,14 @@ def study_series(potential, body, inertia, t, q, Q, h):
     """``(omega, tau, m, u)`` of one case along its outputs: body rate (rad/s), control torque
     and B-dot dipole (internal units, body axes) and the wheels' motor torques, from the kernel
     the integration used; the rigid body's ``omega = I^-1 g`` and zeros without wheels or
-    control."""
+    control. ``q, Q`` the attitude and momentum of ``body``'s axes, ``inertia`` its principal
+    moments: a body given by a full inertia tensor is evaluated in its principal frame and its
+    vectors come back in the body frame ``B`` (``R v_P``, as its Dataset's)."""
+    frame = getattr(body, "frame", None)
+    if frame is not None:
+        potential, pbody, qp, Qp = principal_outputs(potential, body, q, Q)
+        omega, tau, m, u = study_series(potential, pbody, inertia, t, qp, Qp, h)
+        return frame.to_body(omega), frame.to_body(tau), frame.to_body(m), u
     control = getattr(potential, "control", None)
     if control is None and not body.wheels:
         omega = cn.body_rate(q, Q, inertia)
@@ -129,7 +137,8 @@ def refine_crossing(sc, potential, body, t, k, q, Q, h, quantity, level):
                                             max_torque=None if wh.max_torque_n_m is None else wh.max_torque_n_m * u.N * u.m,
                                             max_speed=None if wh.max_speed_rad_s is None
                                             else wh.max_speed_rad_s * u.rad / u.s))
-            b = RigidBody(from_kernel(body.inertia_value, "inertia") * u.kg * u.m**2, wheels=wheels)
+            inertia = body.inertia_value if body.frame is None else body.tensor  # a full tensor: B's
+            b = RigidBody(from_kernel(inertia, "inertia") * u.kg * u.m**2, wheels=wheels)
         tr = propagate(b, State(b, q[k], Q[k]), potential, tf, method=sc.method, **sc.settings)
     except (OrbattError, ValueError):
         return None

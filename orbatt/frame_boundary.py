@@ -31,10 +31,20 @@ The change is made once per run, here, and nowhere else:
   (:func:`principal_trajectory` to compute with the kernels, then :func:`body_variables`)
   turns every body-axes variable (``frame = "B"``: ``omega``, ``g``, the torques, ``wheel_axis``,
   ``dipole_control``, ``knowledge_error``, ``bias_estimate``, ``gyro_bias``, ``gyro_measurement``
-  ...) back with ``R``, and the attitude family (``q``, ``Q``, ``q_orbital``, ``q_estimate``, the
-  Euler angles) with ``r~``; ``knowledge_sigma`` is made in ``B`` from ``R P_att R^T``
+  ...) back with ``R``, and the attitude family (``q_orbital``, ``q_estimate``, the Euler angles)
+  with ``r~``, while ``q`` and ``Q`` are the Trajectory's own (bit for bit; ``(q_B r) r~`` may
+  differ in the last bit); ``knowledge_sigma`` is made in ``B`` from ``R P_att R^T``
   (:func:`orbatt.dataset.navigation.navigation_variables`); it records ``inertia_tensor``
   (``B``) and ``principal_axes`` (``R``) beside the principal moments ``inertia``.
+* **sweeps** (``[sweep]`` of a tensor scenario; its inertia is not swept: the cases share one
+  principal frame): each case is built as its single run (the user's body and ``State`` in
+  ``B``, ``State.from_omega`` per case) and run through :func:`principal_run` by
+  :func:`orbatt.propagate`, so that it equals its single run bit for bit; the per-case outputs
+  derived with the kernels (:func:`orbatt.crossings.study_series`, the energy, a PD law's own
+  pointing error, the knowledge error, a mode's entry) take the case's outputs into ``P`` with
+  :func:`principal_outputs`, as the Dataset does, and give body vectors back in ``B``; the
+  others (the states, pointing errors about a body axis, ``final_wheel_momentum``) are computed
+  in ``B`` from the Trajectory's ``q_B``, ``Q_B`` and the user's wheel axes.
 
 A diagonal tensor has no frame (``RigidBody.frame`` None): nothing here touches its run, which
 stays bit for bit the principal-axes run. A law of a tensor body without a finite per-axis
@@ -58,7 +68,7 @@ from .state import State
 from .torques import TERM_KEYWORDS, EnvironmentTorques, Facet
 
 __all__ = ["frame_of", "principal_run", "principal_potential", "principal_control", "principal_navigation",
-           "body_trajectory", "principal_trajectory", "body_variables", "NOISE_DIAGONAL"]
+           "body_trajectory", "principal_trajectory", "principal_outputs", "body_variables", "NOISE_DIAGONAL"]
 
 def frame_of(bodies):
     """The :class:`~orbatt.body_frame.BodyFrame` shared by ``bodies`` (a RigidBody or a list),
@@ -250,6 +260,19 @@ def principal_trajectory(tr):
                                q=frame.attitude_to_principal(tr.q), Q=frame.attitude_to_principal(tr.Q))
 
 
+def principal_outputs(potential, body, q, Q):
+    """``(potential, body, q, Q)`` of a run's outputs in ``B`` (``q, Q (..., 4)``, the user's
+    ``potential`` with the law it carries, the user's ``body``) in ``P``, for the kernels that
+    derive a sweep's per-case outputs from them (:func:`orbatt.crossings.study_series`): the
+    principal potential and body, ``q_B r`` and ``Q_B r`` (what :func:`principal_trajectory`
+    does to a Trajectory); as given for a body whose axes are principal."""
+    frame = getattr(body, "frame", None)
+    if frame is None:
+        return potential, body, q, Q
+    return (principal_potential(potential, frame), body.principal,
+            np.ascontiguousarray(frame.attitude_to_principal(q)), np.ascontiguousarray(frame.attitude_to_principal(Q)))
+
+
 #: body-axes variables made in B already: the tensor, and the filter's 1-sigma per body axis
 #: (the square root of the diagonal of R P R^T, :func:`orbatt.dataset.navigation.navigation_variables`)
 _IN_B = ("inertia_tensor", "knowledge_sigma")
@@ -259,13 +282,16 @@ def _columns(a, b, c):
     return np.stack([a, b, c], axis=-1)
 
 
-def body_variables(body, data, coords):
+def body_variables(body, data, coords, run_qQ=None):
     """``(data, coords)`` (name -> :class:`~orbatt.dataset.content.Var`, computed in ``P``) in
     the body frame of ``body``: body-axes variables (``frame = "B"``, an ``axis`` dimension)
     times ``R``, the attitude family times ``r~`` (``q``, ``Q``, ``q_orbital``; ``euler_313``
     and ``euler_321`` made again from them), ``inertia`` marked as the principal moments, and
     the tensor recorded (``inertia_tensor``, ``principal_axes``). A body given by principal
-    moments: unchanged; a diagonal tensor only gets ``inertia_tensor``."""
+    moments: unchanged; a diagonal tensor only gets ``inertia_tensor``. ``run_qQ``: the run's
+    ``(q, Q)`` in ``B`` (its :class:`~orbatt.trajectory.Trajectory`'s), written as they are
+    rather than turned back from ``P`` (``(q_B r) r~`` may differ from ``q_B`` in the last bit),
+    so that the Dataset holds the run's attitude bit for bit (a sweep's case its single run's)."""
     from .dataset.content import Var
 
     if body.tensor is None:
@@ -301,6 +327,8 @@ def body_variables(body, data, coords):
         for name, var in variables.items():
             if var.attrs.get("frame") == "B" and var.dims[-1:] == ("axis",) and name not in _IN_B:
                 var = Var(var.dims, frame.to_body(var.values), var.attrs)
+            elif name in ("q", "Q") and run_qQ is not None:
+                var = Var(var.dims, np.array(run_qQ[name == "Q"], dtype=np.float64), var.attrs)
             elif name in ("q", "Q", "q_orbital", "q_estimate"):
                 var = Var(var.dims, frame.attitude_to_body(var.values), var.attrs)
             out[name] = var

@@ -39,6 +39,7 @@ from .dataset.navigation import estimate_at, knowledge_error, navigation_column
 from .laws import LAWS, MODE_SEQUENCE, law_of
 from .methods.problem import kernel_spec
 from .crossings import crossing_time, refine_crossing, study_series
+from .frame_boundary import principal_outputs
 from .pointing import INDEX_KINDS, index_attrs, index_value
 from .units import from_kernel, to_output
 
@@ -240,13 +241,24 @@ class Case:
         return self.pointing(self.t, self.q)
 
     @cached_property
+    def kernel(self):
+        """The kernel model of the case's run (:func:`~orbatt.methods.problem.kernel_spec`; a
+        body given by a full inertia tensor: in its principal frame, as the run's)."""
+        potential, body, _, _ = principal_outputs(self.potential, self.body, self.q[:0], self.Q[:0])
+        return kernel_spec(potential, [body])
+
+    @cached_property
     def knowledge_error(self):
         """``(N, 3)`` the rotation vector (rad, body axes) from the filter's estimate to the truth,
-        as the run's Dataset has it (:mod:`orbatt.dataset.navigation`)."""
+        as the run's Dataset has it (:mod:`orbatt.dataset.navigation`; a full inertia tensor: in
+        its principal frame, turned to ``B`` by ``R``)."""
         nw = len(self.body.wheels)
-        col, _ = navigation_column(kernel_spec(self.potential, [self.body]), nw)
+        col, _ = navigation_column(self.kernel, nw)
         z = self.h[:, nw:]
-        return knowledge_error(self.q, estimate_at(self.t, z, col))
+        frame = getattr(self.body, "frame", None)
+        if frame is None:
+            return knowledge_error(self.q, estimate_at(self.t, z, col))
+        return frame.to_body(knowledge_error(frame.attitude_to_principal(self.q), estimate_at(self.t, z, col)))
 
     @cached_property
     def wheel_speed(self):
@@ -327,7 +339,7 @@ def _mode_entry_time(c):
     run's Dataset: :func:`orbatt.dataset.control.control_variables`)."""
     control = c.potential.control
     nw = len(c.body.wheels)
-    col = nw + mode_column(kernel_spec(c.potential, [c.body]), nw)
+    col = nw + mode_column(c.kernel, nw)
     mode, began = c.h[:, col], c.h[:, col + 1]
     entry = np.full(len(control.names), np.nan)
     for k in range(entry.size):

@@ -498,7 +498,8 @@ def dataset_content(trajectory, *, scenario_text=None, epoch=None, title=None) -
     attrs = global_attrs(method=tr.method, settings=tr.settings, stats=tr.stats, potential=pot_desc,
                          dimensionless=dimless, complete=tr.complete, orbit=orbit, epoch=epoch_s,
                          scenario_text=scenario_text, title=title, **wheels)
-    data, coords = body_variables(trajectory.body, data, coords)  # back to the body frame of a tensor
+    # back to the body frame of a tensor (q and Q: the trajectory's own, bit for bit)
+    data, coords = body_variables(trajectory.body, data, coords, (trajectory.q, trajectory.Q))
     cont = continuation_text(trajectory)
     if cont is not None:  # where a run continued from this file starts (orbatt run --append)
         attrs["continuation"] = cont

@@ -14,7 +14,8 @@ minus sign). A tensor that is not diagonal makes orbatt integrate in its princip
 every body-fixed key (facets, wheels, dipole, constant torque, control axes and per-axis limits,
 ``[sensors]``, ``[initial]``) and
 every body-axes output stays in the body frame (:mod:`orbatt.body_frame`,
-:mod:`orbatt.frame_boundary`). Sweeps of such a scenario are refused (:func:`check_sweep`).
+:mod:`orbatt.frame_boundary`), in a sweep's cases as well; a sweep may not vary the inertia of a
+tensor (:func:`check_sweep`).
 """
 from __future__ import annotations
 
@@ -89,20 +90,18 @@ def parse_inertia(ctx, raw, bounds):
 
 def check_sweep(ctx, sweep, tensor):
     """Refuse a ``[sweep]`` of a scenario whose ``[body] inertia`` is a tensor (``tensor`` not
-    None) where it cannot run: any sweep of a tensor that is not diagonal (the cases' states and
-    bodies are built in principal axes), and the inertia's parameters or paths
-    (``inertia1``..``inertia3``, ``body.inertia[i]``) of a diagonal one (they name principal
-    moments, not the tensor's entries)."""
+    None) that varies the inertia: its parameters or paths (``inertia1``..``inertia3``,
+    ``body.inertia[i]``, a tensor's entries) name principal moments, not the tensor's entries,
+    and the cases of a full tensor would have different principal frames (the members of one
+    ensemble share one, :func:`orbatt.frame_boundary.frame_of`). Any other sweep of a tensor
+    runs: each case through the single run's boundary (:mod:`orbatt.frame_boundary`)."""
     if tensor is None or sweep is None:
         return
-    if not is_diagonal(tensor):
-        raise ctx.error("[sweep]", "a scenario whose [body] inertia is a full tensor (not diagonal) cannot be swept "
-                                   "yet (the sweep builds its cases' bodies and states in principal axes); give "
-                                   "[body] inertia as principal moments [I1, I2, I3] with every body-fixed key in "
-                                   "principal axes, or run an ensemble through the API (orbatt.propagate with a list "
-                                   "of states)")
     swept = [k for k in list(sweep.parameters) + list(sweep.paths)
              if k.startswith("inertia") or k.startswith("body.inertia")]
     if swept:
-        raise ctx.error(f"[sweep] {swept[0]}", "varies [body] inertia, which is given as a tensor; give [body] "
-                                               "inertia as principal moments [I1, I2, I3] to sweep them")
+        why = "" if is_diagonal(tensor) else (" (its cases would have different principal frames, and orbatt "
+                                              "integrates the members of a sweep in one)")
+        raise ctx.error(f"[sweep] {swept[0]}", f"varies [body] inertia, which is given as a tensor{why}; give "
+                                               "[body] inertia as principal moments [I1, I2, I3] (every body-fixed "
+                                               "key in principal axes) to sweep them")

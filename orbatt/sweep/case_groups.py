@@ -161,6 +161,14 @@ def _nominal_key(sc):
     return key
 
 
+def _body(spec, wheels):
+    """The :class:`~orbatt.RigidBody` of a case's ``spec`` with ``wheels``, as its single run's
+    (:class:`~orbatt.scenario.Scenario`): the principal moments, or the full inertia tensor in
+    the body frame (the run then goes through :mod:`orbatt.frame_boundary`)."""
+    inertia = spec.inertia if spec.inertia_tensor is None else spec.inertia_tensor
+    return RigidBody(inertia if spec.dimensionless else u.Quantity(inertia, U.INERTIA), wheels=wheels)
+
+
 class CaseModel:
     """A group's model on a shared :class:`Environment`: what :func:`orbatt.sweep.chunk.
     propagate_group` reads of a :class:`~orbatt.scenario.Scenario` (``times``, ``settings``,
@@ -170,8 +178,7 @@ class CaseModel:
     def __init__(self, spec, env, path=None):
         self.spec, self.path, self.name, self.text = spec, path, spec.name, spec.text
         wheels = [reaction_wheel(w) for w in spec.control["wheels"]] if spec.control is not None else ()
-        self.body = RigidBody(spec.inertia if spec.dimensionless else u.Quantity(spec.inertia, U.INERTIA),
-                              wheels=wheels)
+        self.body = _body(spec, wheels)
         self.orbit, self.times, self.t_end = env.orbit, env.times, env.t_end
         self.method, self.settings = env.method, env.settings
         self.potential = build_potential(spec, env.orbit, float(env.times[-1]))
@@ -215,7 +222,7 @@ def path_groups(sc, spec, values, n):
         wheels = scenario.body.wheels
         bodies, q0, Q0 = [], [], []
         for s in specs:
-            body = RigidBody(s.inertia if s.dimensionless else u.Quantity(s.inertia, U.INERTIA), wheels=wheels)
+            body = _body(s, wheels)
             state = build_initial_state(ctx, s, body, scenario.orbit)
             bodies.append(body)
             q0.append(state.q)

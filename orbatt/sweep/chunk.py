@@ -28,6 +28,7 @@ from ..methods.problem import kernel_spec
 from ..dataset import AXIS_INDEX, AXIS_LABELS, DIMENSIONAL_UNITS, DIMENSIONLESS_UNITS, QUAT_INDEX, QUAT_LABELS
 from ..dataset import cf_variable, to_dataset
 from ..errors import IntegrationError
+from ..frame_boundary import principal_outputs
 from ..laws import law_of
 from ..scenario import FieldContext, Scenario, build_kepler_orbit, build_potential, build_rebound_orbit, parse
 from ..scenario.binary_schema import BinarySpec
@@ -143,12 +144,14 @@ def initial_states(sc, spec, values, axis, inertia, orbit, idx):
     else:
         q = q_c
     q = unit_quaternion(q)
-    if sc.body.wheels:  # a gyrostat: Q holds the wheels' momentum too, as the case's own run builds it
+    if sc.body.wheels or sc.body.frame is not None:
+        # a gyrostat (Q holds the wheels' momentum too) or a full inertia tensor (g = I_B omega, in
+        # B): State.from_omega of each case, as the case's own run builds it (a tensor is not swept)
         iu = sc.body.inertia_unit
         Q = np.empty((m, 4))
         for e in range(m):
-            body = RigidBody(inertia[idx[e]].tolist() if sc.body.dimensionless else inertia[idx[e]] * iu,
-                             wheels=sc.body.wheels)
+            body = sc.body if sc.body.frame is not None else RigidBody(
+                inertia[idx[e]].tolist() if sc.body.dimensionless else inertia[idx[e]] * iu, wheels=sc.body.wheels)
             Q[e] = State.from_omega(body, q[e], w[e] if body.dimensionless else w[e] * body.rate_unit).Q
         return q, Q
     st = State(sc.body, q, cn.momentum_from_omega(q, w, inertia[idx]))
@@ -164,6 +167,7 @@ def noise_potential(potential, case):
     if nav is None:
         return potential
     nav_k, law_k, pot_k = copy.copy(nav), copy.copy(law), copy.copy(potential)
+    pot_k.__dict__.pop("_principal", None)  # (a tensor body's copy in P, orbatt.frame_boundary: the nominal's)
     nav_k.case = int(case)
     law_k.navigation = nav_k
     pot_k.control = law_k
@@ -249,11 +253,17 @@ def pointing_error(spec, q, p):
     return np.arctan2(_norm3(np.cross(b_ref, b)), cos)
 
 
-def conserved_energy(spec, potential, orbit, inertia, q, Q, t):
+def conserved_energy(spec, potential, orbit, inertia, q, Q, t, body=None):
     """The conserved energy of members ``q, Q (m, 4)`` at time ``t``: ``H = T + U``
     (``spec.energy == "hamiltonian"``) or the Jacobi integral ``H - n h.G`` (``"jacobi"``:
     ``n`` the orbit's mean motion, ``h`` its normal, ``G`` the space angular momentum);
-    ``inertia (m, 3)``. Energy unit of the scenario (kg km^2 s^-2, or plain)."""
+    ``inertia (m, 3)`` the principal moments. Energy unit of the scenario (kg km^2 s^-2, or
+    plain). ``body``: the members' body; one given by a full inertia tensor has ``q, Q`` of its
+    body frame ``B``, evaluated in its principal frame (``q_B r``, the principal potential:
+    :func:`orbatt.frame_boundary.principal_outputs`; ``H`` and ``G`` do not depend on the body
+    axes)."""
+    if body is not None:
+        potential, _, q, Q = principal_outputs(potential, body, q, Q)
     g = cn.body_momentum(q, Q)
     T = 0.5 * (g[:, 0] * g[:, 0] / inertia[:, 0] + g[:, 1] * g[:, 1] / inertia[:, 1]
                + g[:, 2] * g[:, 2] / inertia[:, 2])
@@ -346,8 +356,10 @@ def compute_chunk(sc, spec, job, units, on_cases=None):
         if study:
             _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, bad, res)
         if "final_energy_error" in outs:
-            E0 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, 0], Q[:, 0], float(sc.times[0]))
-            E1 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, -1], Q[:, -1], float(sc.times[-1]))
+            E0 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, 0], Q[:, 0], float(sc.times[0]),
+                                  bodies[0])
+            E1 = conserved_energy(spec, potential, orbit, inertia[idx], q[:, -1], Q[:, -1], float(sc.times[-1]),
+                                  bodies[0])
             res["energy_error"][idx] = (E1 - E0) / np.abs(E0)
         if "trajectory" in outs:
             body0 = bodies[0]
@@ -404,11 +416,14 @@ def _study_of_group(sc, spec, potential, orbit, bodies, inertia, idx, tr, q, Q, 
     # a PD law pointing an axis (Sun, ground target) or holding the geodetic nadir: its own error,
     # as the kernel computes it along the run's orbit and tables
     by_law = (control is not None and not by_target and getattr(control, "law", None) == "pd")
-    model = kernel_spec(potential, [bodies[0]]) if by_law else None
+    frame = bodies[0].frame  # a full inertia tensor: the law's error in its principal frame, as its run's
+    law_potential, law_body = principal_outputs(potential, bodies[0], q[:0], Q[:0])[:2]
+    model = kernel_spec(law_potential, [law_body]) if by_law else None
 
     def pointing(t, qq):
         if by_law:
-            return kg.law_errors(kernel_floats(t), np.ascontiguousarray(qq), *model, kp.new_work())
+            qk = qq if frame is None else frame.attitude_to_principal(qq)
+            return kg.law_errors(kernel_floats(t), np.ascontiguousarray(qk), *model, kp.new_work())
         pp = None if p is None else (p if t is sc.times else orbit.orbital_quaternion(t))
         if by_target:
             return target_pointing_error(control, qq, pp)
@@ -462,7 +477,8 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
     if "trajectory" not in outs:
         data["inertia"] = cf_variable(("case", "axis"), to_output(res["inertia"], "inertia", dimless), UN["inertia"],
                                       "principal moments of inertia (I1, I2, I3)",
-                               frame="B")
+                                      frame="B" if getattr(sc.body, "frame", None) is None else "P")
+        data.update(_tensor_variables(sc.body, UN, dimless))
     ref = (f"body axis {spec.pointing_axis.tolist()} vs the same axis of the {spec.pointing_reference} frame"
            if spec.pointing_axis is not None else f"rotation angle of the attitude relative to the "
                                                   f"{spec.pointing_reference} frame")
@@ -490,6 +506,26 @@ def chunk_dataset(sc, spec, case, values, axis, units, res, stats, pieces):
         ds = xr.Dataset(data, coords=coords)
     ds.attrs["integration_stats"] = json.dumps(stats, sort_keys=True)
     return ds
+
+
+def _tensor_variables(body, UN, dimless):
+    """A full inertia tensor's variables, as its single run's Dataset has them
+    (:func:`orbatt.frame_boundary.body_variables`): ``inertia_tensor`` (``B``) and
+    ``principal_axes`` (``R``, whose columns the moments ``inertia`` are about); none for a
+    body whose axes are principal."""
+    frame = getattr(body, "frame", None)
+    if frame is None:
+        return {}
+    dims = ("axis", "axis_column")
+    return {"inertia_tensor": cf_variable(dims, to_output(np.array(body.tensor), "inertia", dimless), UN["inertia"],
+                                          "inertia tensor about the centre of mass (body components)", frame="B",
+                                          comment="as given ([body] inertia); I_B = R diag(inertia) R^T with R = "
+                                                  "principal_axes; the principal moments inertia are about the "
+                                                  "principal axes (frame P)"),
+            "principal_axes": cf_variable(dims, np.array(frame.R), "1",
+                                          "principal axes of inertia (columns, body components)",
+                                          comment="x_B = R x_P: column k is the axis of the principal moment "
+                                                  "inertia[k]; every body-axes output is in B")}
 
 
 def _study_variables(sc, spec, UN, res, coords):
