@@ -230,13 +230,6 @@ def test_six_values_equal_the_matrix():
         assert np.array_equal(a[name].values, b[name].values), name
 
 
-def test_sweeps_of_a_full_tensor_are_refused():
-    sweep = '[sweep]\nsamples = 2\n[sweep.parameters]\nattitude_angle = { distribution = "uniform", low = "0 deg", ' \
-            'high = "10 deg" }'
-    with pytest.raises(ScenarioError, match=r"\[sweep\].*full tensor"):
-        load_scenario(_text(_matrix(TENSOR), sweep=sweep))
-
-
 def test_heavy_top_centre_of_mass_in_the_body_frame():
     xc = np.array([0.0, 0.01, 0.3])
     t = np.linspace(0.0, 2.0, 5)
