@@ -218,10 +218,12 @@ def target_pointing_error(control, q, p):
 class Case:
     """What the compute functions of :data:`OUTPUTS` read of one case: its scenario ``sc``
     (output times, orbit), ``spec`` (the [sweep] table), ``potential`` (with its control law),
-    ``body`` (with its wheels), ``inertia (3,)``, ``q, Q (N, 4)``, ``h (N, k)`` or None (the
-    wheels' momenta, then the flight software's held commands) and ``pointing(t, q) -> (n,)``
-    (the pointing error, rad, that the settling time and the window use); the kernel's series
-    computed once, when first read."""
+    ``body`` (with its wheels), ``inertia (3,)`` (its principal moments), ``q, Q (N, 4)`` (of its
+    body axes: a full inertia tensor's body frame ``B``, as its Trajectory has them), ``h (N,
+    k)`` or None (the wheels' momenta, then the flight software's held commands) and
+    ``pointing(t, q) -> (n,)`` (the pointing error, rad, that the settling time and the window
+    use); the kernel's series computed once, when first read (a tensor body's in its principal
+    frame, body vectors back in ``B``: :func:`orbatt.crossings.study_series`)."""
 
     def __init__(self, sc, spec, potential, body, inertia, q, Q, h, pointing):
         self.sc, self.spec, self.potential, self.body, self.inertia = sc, spec, potential, body, inertia

@@ -124,9 +124,10 @@ inertia         mass x length^2, 3/6/3x3   required                principal mom
                                                                    body-axes output stays in the body frame
                                                                    (docs/design.md §8, orbatt.body_frame); it has
                                                                    positive principal moments that satisfy the
-                                                                   triangle inequality, and cannot be swept; plain
-                                                                   numbers make the scenario dimensionless
-                                                                   (normalized units)
+                                                                   triangle inequality; a tensor cannot be swept
+                                                                   (the scenario's other keys can: each case runs
+                                                                   in the body frame); plain numbers make the
+                                                                   scenario dimensionless (normalized units)
 mass_g          force                      required for heavy-top  weight M g of the heavy top
 center_of_mass  length, 3 values           required for heavy-top  centre of mass in body axes, relative to the
                                                                    fixed point

@@ -222,3 +222,26 @@ def test_a_sweep_of_the_tensor_itself_is_refused(param):
     text = _slew() + '\n[sweep]\n[sweep.parameters]\n' + param + '\n'
     with pytest.raises(ScenarioError, match=r"\[sweep\] .*inertia.*tensor.*different principal frames"):
         parse(text, "tensor-sweep.toml")
+
+
+def test_a_tensor_sweep_s_sun_pointing_error_is_the_angle_of_the_body_axis_to_the_sun():
+    """Body axis 3 of B (not a principal axis) pointed at the Sun: the law's own error, which
+    the kernel computes in P, is the angle between that body axis and the single run's Sun
+    direction turned into B; the law brings the axis onto the Sun."""
+    text = _slew("200 s").replace('target = "inertial"\ntarget_q = [0.7071067811865476, 0.0, 0.0, '
+                                  '0.7071067811865476]   # 90 deg about body axis 3\n',
+                                  'target = "sun"\ntarget_axis = [0.0, 0.0, 1.0]\n', 1)
+    text = text.replace("[orbit]\n", '[orbit]\nepoch = "2026-03-20T12:00:00Z"\n', 1)
+    text = re.sub(r'output_step = "[^"]*"', 'output_step = "5 s"', text)
+    assert 'target = "sun"' in text
+    sw, ds = _sweep(text, 'outputs = ["final_state", "ape"]\n[sweep.parameters]\n'
+                          'omega1 = { values = ["0.2 deg/s", "-0.1 deg/s"] }\n')
+    axis = np.array([0.0, 0.0, 1.0])
+    for k in range(sw.cases):
+        one, _ = _single(sw, k)
+        assert np.array_equal(ds["q_final"].values[k], one["q"].values[-1]), k
+        s = qt.rotate_inv(one["q"].values, one["sun_direction"].values)  # the Sun in B
+        err = np.arctan2(_norms(np.cross(s, axis)), s @ axis)
+        want = index_value("ape", sw.scenario.times, err, sw.spec.confidence, sw.spec.stability_window)
+        assert ds["ape"].values[k] == pytest.approx(want, rel=1e-7, abs=1e-9), k
+        assert err[-1] < np.radians(2.0), k
