@@ -332,7 +332,7 @@ class Bs32(DOP853):
     in the compiled step loop of :class:`DOP853` (controller exponent 1/3; error ``|h| rms((b -
     bhat) . K / sk)``); lands on every output time. For flight software at a dense period, where
     one step of order 3 per tick meets the tolerance: 4 right-hand sides per tick (3 stages and the
-    derivative after the tick) against DOP853's 13 (``benchmarks/basilisk_fsw.py``)."""
+    derivative after the tick) against DOP853's 12 (``benchmarks/basilisk_fsw.py``)."""
 
     name = "bs32"
     order = 3
