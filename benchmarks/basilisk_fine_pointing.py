@@ -84,6 +84,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))   # the sibling scripts, whoever loads this one
+from basilisk_mc import controller_subprocess, run_controller  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 BASE = ROOT / "scenarios" / "cubesat-slew-wheels.toml"
 DT = 0.1                 # s, the flight software's rate, the gyro's, Basilisk's task step
@@ -400,56 +403,12 @@ def mc_retain(sim):
     return {"ape": ape, "ake": ake, "knowledge_rms": krms}
 
 
-def run_controller(create, execute, retain, cases, workers, folder, dispersions):
-    """Run ``cases`` cases with Basilisk's ``MonteCarlo.Controller`` on ``workers`` processes:
-    ``create()`` builds a case's simulation, ``execute(sim)`` runs it (the dispersed attributes
-    set on ``sim``), ``retain(sim)`` returns the dict kept of it; ``dispersions``: ``[(attribute,
-    (low, high))]``, uniform; the modules' seeds dispersed; archives under ``folder``. Functions
-    at module level (pickled by reference). Returns (wall s, retained dicts). Shared with
-    ``basilisk_fsw.py``."""
-    from Basilisk.utilities.MonteCarlo.Controller import Controller
-    from Basilisk.utilities.MonteCarlo.Dispersions import UniformDispersion
-    from Basilisk.utilities.MonteCarlo.RetentionPolicy import RetentionPolicy
-
-    mc = Controller()
-    mc.setSimulationFunction(create)
-    mc.setExecutionFunction(execute)
-    mc.setExecutionCount(cases)
-    mc.setThreadCount(workers)
-    mc.setShouldDisperseSeeds(True)
-    mc.setArchiveDir(str(folder) + "/")
-    mc.setVerbose(False)
-    for name, bounds in dispersions:
-        mc.addDispersion(UniformDispersion(name, bounds))
-    policy = RetentionPolicy()
-    policy.addRetentionFunction(retain)
-    mc.addRetentionPolicy(policy)
-    t0 = time.perf_counter()
-    failed = mc.executeSimulations()
-    wall = time.perf_counter() - t0
-    if failed:
-        raise RuntimeError(f"Basilisk Controller: cases {failed} failed")
-    kept = [mc.getRetainedData(k)["custom"] for k in range(cases)]
-    return wall, kept
-
-
 def basilisk_controller(p, cases, workers, folder):
     """Run ``cases`` cases with ``MonteCarlo.Controller`` on ``workers`` processes; returns
     (wall s, retained dicts)."""
     w = math.radians(RATE_SPREAD_DEG)
     return run_controller(functools.partial(mc_create, p), mc_execute, mc_retain, cases, workers, folder,
                           [(f"omega{i}", (-w, w)) for i in (1, 2, 3)])
-
-
-def controller_subprocess(script, arg):
-    """Run ``python script --controller arg`` (a benchmark's child that prints the JSON of
-    ``{"wall": s, "kept": [...]}`` as its last line) and return ``(wall, kept)``. The
-    Controller's pool forks: forking a process where numba's threads have started can hang the
-    children, hence a fresh process."""
-    out = subprocess.run([sys.executable, str(script), "--controller", arg], check=True, capture_output=True,
-                         text=True).stdout
-    res = json.loads(out.strip().splitlines()[-1])
-    return res["wall"], res["kept"]
 
 
 def controller_process(t_end, cases, workers, folder):

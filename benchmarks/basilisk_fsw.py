@@ -46,14 +46,14 @@ the work) and ``load_sweep(path).compute()`` (one in-process ensemble call), out
 ``final_state`` and ``max_pointing_error``, with the scenario's ``dop853`` (each member its own
 steps) and with ``[integration] method = "dopri5-lanes"`` and ``"bs32-lanes"`` (:data:`MC_METHODS`:
 the members of a group of 32 step together between the shared ticks). Basilisk: (1) its
-``MonteCarlo.Controller`` on one process per core (offline, from a fresh process: the helper of
-``basilisk_fine_pointing.py``; dispersions ``omega1..3`` uniform in +-1 deg/s set on the hub
-before ``InitializeSimulation``, seeds dispersed, a retention function returning the final
-attitude), timed at 4 and 12 cases (``--quick``: 1 and 4), fitted as ``a + b N`` (its pool's
-start-up apart) and projected to 500: its worker sleeps 1 s after each case's retained data, part
-of what its user waits for; (2) its cases one after the other in this
-process (build, initialize, execute each: what a worker does, without the pool), 20 of the
-sweep's own cases timed and scaled to 500, their final attitudes compared with orbatt's.
+``MonteCarlo.Controller`` on one process per core (offline, from a fresh process: the helpers of
+``basilisk_mc.py``, shared with ``basilisk_fine_pointing.py``; dispersions ``omega1..3`` uniform
+in +-1 deg/s set on the hub before ``InitializeSimulation``, seeds dispersed, a retention function
+returning the final attitude), timed at 4 and 12 cases (``--quick``: 1 and 4), fitted as ``a + b
+N`` (its pool's start-up apart) and projected to 500: its worker sleeps 1 s after each case's
+retained data, part of what its user waits for; (2) its cases one after the other in this process
+(build, initialize, execute each: what a worker does, without the pool), 20 of the sweep's own
+cases timed and scaled to 500, their final attitudes compared with orbatt's.
 """
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))   # the sibling scripts, whoever loads this one
-from basilisk_fine_pointing import controller_subprocess, run_controller  # noqa: E402
+from basilisk_mc import controller_subprocess, run_controller  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "scenarios" / "lvlh-hold-wheels.toml"
