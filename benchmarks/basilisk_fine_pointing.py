@@ -84,6 +84,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))   # the sibling scripts, whoever loads this one
+from basilisk_mc import controller_subprocess, run_controller  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 BASE = ROOT / "scenarios" / "cubesat-slew-wheels.toml"
 DT = 0.1                 # s, the flight software's rate, the gyro's, Basilisk's task step
@@ -403,41 +406,15 @@ def mc_retain(sim):
 def basilisk_controller(p, cases, workers, folder):
     """Run ``cases`` cases with ``MonteCarlo.Controller`` on ``workers`` processes; returns
     (wall s, retained dicts)."""
-    from Basilisk.utilities.MonteCarlo.Controller import Controller
-    from Basilisk.utilities.MonteCarlo.Dispersions import UniformDispersion
-    from Basilisk.utilities.MonteCarlo.RetentionPolicy import RetentionPolicy
-
-    mc = Controller()
-    mc.setSimulationFunction(functools.partial(mc_create, p))
-    mc.setExecutionFunction(mc_execute)
-    mc.setExecutionCount(cases)
-    mc.setThreadCount(workers)
-    mc.setShouldDisperseSeeds(True)
-    mc.setArchiveDir(str(folder) + "/")
-    mc.setVerbose(False)
     w = math.radians(RATE_SPREAD_DEG)
-    for i in (1, 2, 3):
-        mc.addDispersion(UniformDispersion(f"omega{i}", (-w, w)))
-    policy = RetentionPolicy()
-    policy.addRetentionFunction(mc_retain)
-    mc.addRetentionPolicy(policy)
-    t0 = time.perf_counter()
-    failed = mc.executeSimulations()
-    wall = time.perf_counter() - t0
-    if failed:
-        raise RuntimeError(f"Basilisk Controller: cases {failed} failed")
-    kept = [mc.getRetainedData(k)["custom"] for k in range(cases)]
-    return wall, kept
+    return run_controller(functools.partial(mc_create, p), mc_execute, mc_retain, cases, workers, folder,
+                          [(f"omega{i}", (-w, w)) for i in (1, 2, 3)])
 
 
 def controller_process(t_end, cases, workers, folder):
-    """:func:`basilisk_controller` in a fresh Python process (its pool forks: forking this
-    process, with numba's threads started, can hang the children). Returns (the Controller's
-    wall s, retained dicts)."""
-    cmd = [sys.executable, __file__, "--controller", f"{t_end:g},{cases},{workers},{folder}"]
-    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    res = json.loads(out.strip().splitlines()[-1])
-    return res["wall"], res["kept"]
+    """:func:`basilisk_controller` in a fresh Python process (:func:`controller_subprocess`).
+    Returns (the Controller's wall s, retained dicts)."""
+    return controller_subprocess(__file__, f"{t_end:g},{cases},{workers},{folder}")
 
 
 def _controller_main(arg):

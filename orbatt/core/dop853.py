@@ -43,6 +43,10 @@ and lanes forms; coefficients: :mod:`orbatt.core.dopri5_coefficients`) runs in t
 stages, the seventh ``f(t + h, y_new)`` (FSAL inside the tableau: 6 evaluations per attempt),
 the error of Verner's form with ``E = b - bhat`` of order 4 and the controller with ``err^(1/5)``
 (Hairer's ``dopri5.f``). For the flight software's ticks (``benchmarks/tick_stepping.py``).
+Bogacki-Shampine 3(2) (:data:`advance_bs32` and the same forms; coefficients:
+:mod:`orbatt.core.bs32_coefficients`) likewise: 4 stages, the fourth ``f(t + h, y_new)`` (3
+evaluations per attempt), the controller with ``err^(1/3)``; for ticks so dense that one step of
+order 3 per tick meets the tolerance (``benchmarks/basilisk_fsw.py``).
 
 Breakpoints: steps also land on the knots of the model's tables, a sampled orbit's samples and
 the environment tables (:func:`orbatt.core.model.next_breakpoint`), where the right-hand
@@ -90,7 +94,9 @@ __all__ = ["advance", "advance_wide", "advance_batch", "advance_batch_wide", "ad
            "advance_group_wide_verner98", "advance_lanes", "advance_lanes_wide", "advance_lanes_verner98",
            "advance_lanes_wide_verner98", "advance_dopri5", "advance_wide_dopri5", "advance_batch_dopri5",
            "advance_batch_wide_dopri5", "advance_group_dopri5", "advance_group_wide_dopri5", "advance_lanes_dopri5",
-           "advance_lanes_wide_dopri5", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE",
+           "advance_lanes_wide_dopri5", "advance_bs32", "advance_wide_bs32", "advance_batch_bs32",
+           "advance_batch_wide_bs32", "advance_group_bs32", "advance_group_wide_bs32", "advance_lanes_bs32",
+           "advance_lanes_wide_bs32", "TABLEAUS", "new_state", "momentum_scale", "begin_attempt", "NDIM", "DONE",
            "PAUSED", "BUFFER_FULL", "NONFINITE", "STEP_TOO_SMALL", "MAX_STEPS", "FLAG_F0_VALID", "FLAG_REJECTED",
            "FLAG_NONFINITE", "FLAG_BITS", "BAD_LANE_SHIFT", "ST_T", "ST_H", "ST_FACOLD", "ST_HMIN", "ST_SWITCH_T",
            "ST_SWITCH_K", "ST_SIZE", "EPS", "CNT_STEPS", "CNT_REJECTED", "CNT_NFEV", "CNT_IOUT", "CNT_NREC", "CNT_FLAGS",
@@ -115,6 +121,10 @@ advance_wide_verner98 = loop_of(0, True, "verner98")
 #: (:mod:`orbatt.core.dopri5_coefficients`; compiled on first use only)
 advance_dopri5 = loop_of(NDIM, False, "dopri5")
 advance_wide_dopri5 = loop_of(0, True, "dopri5")
+#: the rigid body's and extended models' step loops with Bogacki-Shampine 3(2)
+#: (:mod:`orbatt.core.bs32_coefficients`; compiled on first use only)
+advance_bs32 = loop_of(NDIM, False, "bs32")
+advance_wide_bs32 = loop_of(0, True, "bs32")
 advance_coupled = loop_of(0, False, coupled=True)
 advance_coupled_verner98 = loop_of(0, False, "verner98", coupled=True)
 
@@ -132,15 +142,20 @@ advance_group_wide_verner98 = loop_of(0, True, "verner98", lanes=True)
 #: :data:`advance_group` and :data:`advance_group_wide` with Dormand-Prince 5(4)
 advance_group_dopri5 = loop_of(NDIM, False, "dopri5", lanes=True)
 advance_group_wide_dopri5 = loop_of(0, True, "dopri5", lanes=True)
+#: :data:`advance_group` and :data:`advance_group_wide` with Bogacki-Shampine 3(2)
+advance_group_bs32 = loop_of(NDIM, False, "bs32", lanes=True)
+advance_group_wide_bs32 = loop_of(0, True, "bs32", lanes=True)
 
 
 def _batch_of(extended, tableau="dop853"):
     """The ensemble driver over members of :func:`advance` or (``extended``) :func:`advance_wide`,
     or with ``tableau="verner98"`` of :func:`advance_verner98` or :func:`advance_wide_verner98`,
-    ``"dopri5"`` of :data:`advance_dopri5` or :data:`advance_wide_dopri5` (constants of the
-    closure, as in :func:`orbatt.core.rk_loop.loop_of`)."""
+    ``"dopri5"`` of :data:`advance_dopri5` or :data:`advance_wide_dopri5`, ``"bs32"`` of
+    :data:`advance_bs32` or :data:`advance_wide_bs32` (constants of the closure, as in
+    :func:`orbatt.core.rk_loop.loop_of`)."""
     verner = tableau == "verner98"
     dopri5 = tableau == "dopri5"
+    bs32 = tableau == "bs32"
 
     def advance_batch(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK,
                       rtol, atol, max_step, max_steps, budget):
@@ -180,6 +195,15 @@ def _batch_of(extended, tableau="dop853"):
                     status[e] = advance_dopri5(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
                                                inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
                                                max_steps, budget)
+            elif bs32:
+                if extended:
+                    status[e] = advance_wide_bs32(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
+                                                  inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
+                                                  max_steps, budget)
+                else:
+                    status[e] = advance_bs32(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all,
+                                             inertia[e], terms, params, table, WORK[e], rtol, atol, max_step,
+                                             max_steps, budget)
             elif extended:
                 status[e] = advance_wide(Y[e], ST[e], CNT[e], F0[e], t_out, rec_t, out_y[e], record_all, inertia[e],
                                          terms, params, table, WORK[e], rtol, atol, max_step, max_steps, budget)
@@ -198,14 +222,18 @@ advance_batch_wide_verner98 = _batch_of(True, "verner98")
 #: :data:`advance_batch` and :data:`advance_batch_wide` with Dormand-Prince 5(4)
 advance_batch_dopri5 = _batch_of(False, "dopri5")
 advance_batch_wide_dopri5 = _batch_of(True, "dopri5")
+#: :data:`advance_batch` and :data:`advance_batch_wide` with Bogacki-Shampine 3(2)
+advance_batch_bs32 = _batch_of(False, "bs32")
+advance_batch_wide_bs32 = _batch_of(True, "bs32")
 
 
 def _lanes_of(extended, tableau="dop853"):
     """The ensemble driver over lockstep groups of :data:`advance_group` (``extended``:
-    :data:`advance_group_wide`; ``tableau="verner98"``, ``"dopri5"``: their Verner, Dormand-Prince
-    5(4) forms)."""
+    :data:`advance_group_wide`; ``tableau="verner98"``, ``"dopri5"``, ``"bs32"``: their Verner,
+    Dormand-Prince 5(4), Bogacki-Shampine 3(2) forms)."""
     verner = tableau == "verner98"
     dopri5 = tableau == "dopri5"
+    bs32 = tableau == "bs32"
 
     def advance_lanes(Y, ST, CNT, F0, t_out, out_y, status, inertia, terms, params, table, WORK, lanes, rtol, atol,
                       max_step, max_steps, budget):
@@ -235,6 +263,15 @@ def _lanes_of(extended, tableau="dop853"):
                     status[gi] = advance_group_dopri5(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
                                                       record_all, inertia[a:b], terms, params, table, WORK[gi], rtol,
                                                       atol, max_step, max_steps, budget)
+            elif bs32:
+                if extended:
+                    status[gi] = advance_group_wide_bs32(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
+                                                         record_all, inertia[a:b], terms, params, table, WORK[gi],
+                                                         rtol, atol, max_step, max_steps, budget)
+                else:
+                    status[gi] = advance_group_bs32(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b],
+                                                    record_all, inertia[a:b], terms, params, table, WORK[gi], rtol,
+                                                    atol, max_step, max_steps, budget)
             elif extended:
                 status[gi] = advance_group_wide(Y[a:b], ST[gi], CNT[gi], F0[a:b], t_out, rec_t, out_y[a:b], record_all,
                                                 inertia[a:b], terms, params, table, WORK[gi], rtol, atol, max_step,
@@ -256,3 +293,6 @@ advance_lanes_wide_verner98 = _lanes_of(True, "verner98")
 #: :data:`advance_lanes` and :data:`advance_lanes_wide` with Dormand-Prince 5(4)
 advance_lanes_dopri5 = _lanes_of(False, "dopri5")
 advance_lanes_wide_dopri5 = _lanes_of(True, "dopri5")
+#: :data:`advance_lanes` and :data:`advance_lanes_wide` with Bogacki-Shampine 3(2)
+advance_lanes_bs32 = _lanes_of(False, "bs32")
+advance_lanes_wide_bs32 = _lanes_of(True, "bs32")

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ._jit import (DONE, FLAG_NONFINITE, MAX_STEPS, NDIM, NONFINITE, PAUSED, STEP_TOO_SMALL, jit_inline)
+from . import bs32_coefficients as _bs
 from . import dop853_coefficients as _dp
 from . import dopri5_coefficients as _d5
 from . import verner98_coefficients as _vn
@@ -261,14 +262,15 @@ def begin_attempt(attempts, budget, cnt, max_steps, t, h, max_step, t_out, i_out
 
 
 #: the Runge-Kutta pairs the step loop runs: ``(N_STAGES, A_PTR, A_COL, A_VAL, C, B, E_HI,
-#: E_LO)``; DOP853's error norm takes both estimates, Verner's 9(8) pair and Dormand-Prince 5(4)
-#: one (``E_LO`` unused)
+#: E_LO)``; DOP853's error norm takes both estimates, Verner's 9(8) pair, Dormand-Prince 5(4) and
+#: Bogacki-Shampine 3(2) one (``E_LO`` unused)
 TABLEAUS = {"dop853": (_dp.N_STAGES, _dp.A_PTR, _dp.A_COL, _dp.A_VAL, _dp.C, _dp.B, _dp.E5, _dp.E3),
             "verner98": (_vn.N_STAGES, _vn.A_PTR, _vn.A_COL, _vn.A_VAL, _vn.C, _vn.B, _vn.E, _vn.E),
-            "dopri5": (_d5.N_STAGES, _d5.A_PTR, _d5.A_COL, _d5.A_VAL, _d5.C, _d5.B, _d5.E, _d5.E)}
+            "dopri5": (_d5.N_STAGES, _d5.A_PTR, _d5.A_COL, _d5.A_VAL, _d5.C, _d5.B, _d5.E, _d5.E),
+            "bs32": (_bs.N_STAGES, _bs.A_PTR, _bs.A_COL, _bs.A_VAL, _bs.C, _bs.B, _bs.E, _bs.E)}
 #: how the step loop controls each pair: ``(k, order, last_new)``: the controller's exponent
 #: ``1/k`` (the error estimate's order + 1), the order of Hairer's initial step, and whether the
-#: tableau's last stage is ``f(t + h, y_new)`` (FSAL inside the tableau: Dormand-Prince 5(4);
-#: the others evaluate the next step's first stage on acceptance)
+#: tableau's last stage is ``f(t + h, y_new)`` (FSAL inside the tableau: Dormand-Prince 5(4),
+#: Bogacki-Shampine 3(2); the others evaluate the next step's first stage on acceptance)
 PAIRS = {"dop853": (8, _dp.ORDER, False), "verner98": (9, _dp.ORDER, False),
-         "dopri5": (5, _d5.ORDER, _d5.LAST_STAGE_IS_NEW)}
+         "dopri5": (5, _d5.ORDER, _d5.LAST_STAGE_IS_NEW), "bs32": (3, _bs.ORDER, _bs.LAST_STAGE_IS_NEW)}

@@ -26,6 +26,12 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
     the tolerance anyway: 7 right-hand-side evaluations per tick against 12 of ``"dop853"`` at
     10 Hz (``benchmarks/tick_stepping.py``); without ticks ``"dop853"`` is the faster (2.6x fewer
     evaluations on the Keplerian case at rtol 1e-10).
+``"bs32"`` (:mod:`.dop853`)
+    Bogacki-Shampine 3(2) (4 stages, FSAL) in the same compiled loop and options as ``"dop853"``.
+    For flight software at a period so dense that one step of order 3 per tick meets the
+    tolerance: 4 right-hand sides per tick against 12 of ``"dop853"`` on the 10 Hz LVLH hold
+    (``benchmarks/basilisk_fsw.py``); far slower than ``"dop853"`` without ticks or at tight
+    tolerances.
 ``"dop853-lanes"`` (:mod:`.dop853`)
     For ensembles: DOP853 on groups of ``lanes`` members (default 32) that share the step
     size (controlled by the group's largest error) and the orbit evaluation, with the
@@ -33,8 +39,8 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
     each member is at least as accurate as alone, but results are not bitwise those of
     one-by-one runs. Rigid bodies and extended models (wheels, control laws): the same compiled
     step loop as ``"dop853"`` (:mod:`orbatt.core.rk_loop`), instantiated for a group of lanes.
-``"vern98-lanes"``, ``"dopri5-lanes"`` (:mod:`.dop853`)
-    ``"dop853-lanes"`` with Verner's 9(8) pair, with Dormand-Prince 5(4).
+``"vern98-lanes"``, ``"dopri5-lanes"``, ``"bs32-lanes"`` (:mod:`.dop853`)
+    ``"dop853-lanes"`` with Verner's 9(8) pair, with Dormand-Prince 5(4), with Bogacki-Shampine 3(2).
 ``"splitting2"``, ``"splitting4"``, ``"splitting6"`` (and named variants; :mod:`.fixed_step`)
     Symplectic splitting (:mod:`orbatt.core.splitting`), fixed ``step``: Strang (order 2),
     McLachlan's 5-stage composition (order 4; ``"splitting4-yoshida"``,
@@ -61,12 +67,12 @@ Writing a method: see :class:`Method` (the subclass contract) and :func:`registe
 from __future__ import annotations
 
 from .base import METHODS, Method, methods, register, resolve_method
-from .dop853 import DOP853, DOP853Lanes, Dopri5, Dopri5Lanes, Vern98, Vern98Lanes
+from .dop853 import DOP853, DOP853Lanes, Bs32, Bs32Lanes, Dopri5, Dopri5Lanes, Vern98, Vern98Lanes
 from .exact import Exact
 from .fixed_step import RK4, FixedStep, Splitting
 from .problem import KernelSpec, Problem
 from .scipy_ivp import Scipy
 
 __all__ = ["Method", "METHODS", "methods", "register", "resolve_method", "Problem", "KernelSpec", "DOP853",
-           "DOP853Lanes", "Vern98", "Vern98Lanes", "Dopri5", "Dopri5Lanes", "Exact", "FixedStep", "RK4", "Splitting",
+           "DOP853Lanes", "Vern98", "Vern98Lanes", "Dopri5", "Dopri5Lanes", "Bs32", "Bs32Lanes", "Exact", "FixedStep", "RK4", "Splitting",
            "Scipy"]

@@ -1,7 +1,8 @@
-"""Drivers of the compiled DOP853, Verner 9(8) and Dormand-Prince 5(4) kernels
-(:mod:`orbatt.core.dop853`, the one step loop of :mod:`orbatt.core.rk_loop`): ``"dop853"``,
-``"vern98"``, ``"dopri5"`` (one member, or an ensemble stepped member by member in parallel) and
-``"dop853-lanes"``, ``"vern98-lanes"``, ``"dopri5-lanes"`` (an ensemble in lockstep groups)."""
+"""Drivers of the compiled DOP853, Verner 9(8), Dormand-Prince 5(4) and Bogacki-Shampine 3(2)
+kernels (:mod:`orbatt.core.dop853`, the one step loop of :mod:`orbatt.core.rk_loop`): ``"dop853"``,
+``"vern98"``, ``"dopri5"``, ``"bs32"`` (one member, or an ensemble stepped member by member in
+parallel) and ``"dop853-lanes"``, ``"vern98-lanes"``, ``"dopri5-lanes"``, ``"bs32-lanes"`` (an
+ensemble in lockstep groups)."""
 from __future__ import annotations
 
 import math
@@ -21,7 +22,8 @@ from ..errors import InputError
 from .base import Method, budget_limit, count_totals, group_sizes, register
 from .problem import KernelSpec
 
-__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes", "Dopri5", "Dopri5Lanes", "LockstepSwitchWarning",
+__all__ = ["DOP853", "DOP853Lanes", "Vern98", "Vern98Lanes", "Dopri5", "Dopri5Lanes", "Bs32", "Bs32Lanes",
+           "LockstepSwitchWarning",
            "tick_grid", "with_phase", "resume_stepper"]
 
 #: counters summed into the statistics
@@ -328,6 +330,21 @@ class Dopri5(DOP853):
              True: (kd.advance_wide_dopri5, kd.advance_batch_wide_dopri5)}
 
 
+@register
+class Bs32(DOP853):
+    """Bogacki-Shampine 3(2) (4 stages, FSAL inside the tableau: :mod:`orbatt.core.bs32_coefficients`)
+    in the compiled step loop of :class:`DOP853` (controller exponent 1/3; error ``|h| rms((b -
+    bhat) . K / sk)``); lands on every output time. For flight software at a dense period, where
+    one step of order 3 per tick meets the tolerance: 4 right-hand sides per tick (3 stages and the
+    derivative after the tick) against DOP853's 12 (``benchmarks/basilisk_fsw.py``)."""
+
+    name = "bs32"
+    order = 3
+    description = "compiled adaptive Bogacki-Shampine 3(2) (4 stages, FSAL), Hairer-style PI step-size control"
+    loops = {False: (kd.advance_bs32, kd.advance_batch_bs32),
+             True: (kd.advance_wide_bs32, kd.advance_batch_wide_bs32)}
+
+
 class LockstepSwitchWarning(UserWarning):
     """A lockstep-lanes method on an ensemble whose model has switching functions
     (:mod:`orbatt.core.switches`): slower than independent members there, and not bitwise."""
@@ -457,6 +474,21 @@ class Dopri5Lanes(DOP853Lanes):
     loops = Dopri5.loops
     group_loops = {False: (kd.advance_group_dopri5, kd.advance_lanes_dopri5),
                    True: (kd.advance_group_wide_dopri5, kd.advance_lanes_wide_dopri5)}
+
+
+@register
+class Bs32Lanes(DOP853Lanes):
+    """Bogacki-Shampine 3(2) over an ensemble in lockstep groups (the one step loop of
+    :class:`DOP853Lanes` with the pair of :class:`Bs32`)."""
+
+    name = "bs32-lanes"
+    order = 3
+    description = ("compiled Bogacki-Shampine 3(2) for ensembles: groups of members share the step size and the "
+                   "orbit evaluation, vectorized over members (results agree with one-by-one runs to the "
+                   "tolerance, not bitwise)")
+    loops = Bs32.loops
+    group_loops = {False: (kd.advance_group_bs32, kd.advance_lanes_bs32),
+                   True: (kd.advance_group_wide_bs32, kd.advance_lanes_wide_bs32)}
 
 
 #: the values of the option ``independent_variable``

@@ -18,6 +18,8 @@ FREE_SETTINGS = {
     "vern98-lanes": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "dopri5": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "dopri5-lanes": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
+    "bs32": ({"rtol": 1e-10, "atol": 1e-12}, 1e-6),
+    "bs32-lanes": ({"rtol": 1e-10, "atol": 1e-12}, 1e-6),
     "scipy-DOP853": ({"rtol": 1e-12, "atol": 1e-14}, 1e-10),
     "scipy-RK45": ({"rtol": 1e-9, "atol": 1e-11}, 1e-7),
     "scipy-RK23": ({"rtol": 1e-8, "atol": 1e-10}, 1e-5),
