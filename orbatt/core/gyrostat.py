@@ -339,12 +339,16 @@ def _grid_after(t, phase, period):
 
 
 @jit_inline
-def _on_grid(s, t, phase, period, terms, params):
+def _on_grid(s, t, phase, period, terms, params, t_grid):
     """Whether ``s`` (the independent variable; ``t`` its time) is a tick ``phase + k period``
-    as :func:`next_tick` gives them (in the eccentric anomaly: the tick's anomaly)."""
+    as :func:`next_tick` gives them (in the eccentric anomaly: the tick's anomaly). ``t_grid``:
+    the time of the tick the step loop landed on (:func:`next_tick_grid`: ``s`` is its anomaly
+    exactly), which spares Kepler's equation for a row whose tick it is; NaN: unknown."""
     k = math.floor((t - phase) / period + 0.5)
     tk = phase + k * period
     if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
+        if tk == t_grid:
+            return True
         return anomaly_of_time(tk, params[terms[0, P0]:terms[0, P1]]) == s
     return tk == s
 
@@ -366,7 +370,18 @@ def next_tick(s, terms, params):
     """The first flight-software tick after ``s`` of the model's laws, in the step loops'
     independent variable (the time, or the eccentric anomaly: :func:`orbit_at`); ``inf`` if
     none. The step loops land on it as on a breakpoint."""
+    return next_tick_grid(s, terms, params)[0]
+
+
+@jit
+def next_tick_grid(s, terms, params):
+    """``(s_k, t_k)``: :func:`next_tick` and its time (what :func:`tick` takes as ``t_grid``);
+    ``(inf, nan)`` if none. Rows whose ticks fall at the same time share one solution of
+    Kepler's equation."""
     best = np.inf
+    best_t = math.nan
+    last_t = math.nan
+    last_s = math.nan
     kind0 = terms[0, KIND]
     orb = params[terms[0, P0]:terms[0, P1]]
     t = time_of_s(s, terms, params)
@@ -380,24 +395,27 @@ def next_tick(s, terms, params):
             tk = _grid_after(t, params[p0 + _CTL_PHASE], period)
             sk = tk
             if kind0 == ORBIT_KEPLER_ANOMALY:
-                sk = anomaly_of_time(tk, orb)
+                sk = last_s if tk == last_t else anomaly_of_time(tk, orb)
                 while sk <= s:  # (rounding of the map to the anomaly)
                     tk = _grid_after(tk, params[p0 + _CTL_PHASE], period)
                     sk = anomaly_of_time(tk, orb)
+                last_t = tk
+                last_s = sk
             if sk < best:
                 best = sk
-    return best
+                best_t = tk
+    return best, best_t
 
 
 @jit
-def tick(s, y, inertia, terms, params, table, work, start):
+def tick(s, y, inertia, terms, params, table, work, start, t_grid):
     """The flight software at ``s`` (the step loops' independent variable) on the state ``y``:
     each law with a period evaluates itself on ``y`` and writes the command it holds until
     its next tick into ``y[z0:z0 + nz]`` (the PD law's torque, or its wheels' motor torques
     clipped to the motors' limits; B-dot's dipole). ``start``: the start of a run (the driver
     calls it once, before the step loop), where every law evaluates and a mode sequence begins
     in its first mode; else the laws whose tick ``s`` is evaluate (the loop landed on a tick of
-    one of them)."""
+    one of them; ``t_grid``: that tick's time, :func:`next_tick_grid`, NaN if unknown)."""
     t, _, r, xhat, v = orbit_at(s, terms, params, table, work)
     q = (y[0], y[1], y[2], y[3])
     w0 = wheel_row(terms)
@@ -407,7 +425,7 @@ def tick(s, y, inertia, terms, params, table, work, start):
     for j in range(1, terms.shape[0]):  # the sensors and the filter first (issue 33)
         if terms[j, KIND] == NAVIGATION:
             nav = terms[j, P0]
-            if start or _on_grid(s, t, params[nav + _CTL_PHASE], params[nav + _CTL_PERIOD], terms, params):
+            if start or _on_grid(s, t, params[nav + _CTL_PHASE], params[nav + _CTL_PERIOD], terms, params, t_grid):
                 sun = (0.0, 0.0, 0.0)
                 if terms[j, R1] > terms[j, R0]:
                     s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
@@ -422,7 +440,7 @@ def tick(s, y, inertia, terms, params, table, work, start):
     q, omega = est.estimate_feedback(y, params, nav, q, omega)
     for j in range(1, terms.shape[0]):  # the mode sequence next: its transition, then the laws
         if terms[j, KIND] == MODES:
-            mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j, start)
+            mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j, start, t_grid)
     mode = current_mode(terms, params, y)
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
@@ -435,7 +453,7 @@ def tick(s, y, inertia, terms, params, table, work, start):
         if not period > 0.0:
             continue
         z0 = int(params[p0 + _CTL_Z0])
-        if not start and not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params):
+        if not start and not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params, t_grid):
             continue
         if kind == PD_CONTROL:
             aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
@@ -502,7 +520,7 @@ def pd_row_target(j, t, terms, params, table, work):
 
 
 @jit
-def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, jm, start):
+def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, jm, start, t_grid):
     """The mode sequence of row ``jm`` at a tick ``s`` (time ``t``) on the state ``y``: at the
     start of a run (its state unset), mode 0 from ``t``; on one of its ticks, leave the current
     mode for the next when its ``until_time`` has passed since it began, or when its other
@@ -520,7 +538,7 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
         return
     if not params[p0 + _CTL_PERIOD] > 0.0:  # a continuous sequence: orbatt.core.mode_events
         return
-    if not _on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params):
+    if not _on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params, t_grid):
         return
     m = int(y[z])
     if m >= int(params[p0 + _MD_COUNT]) - 1:

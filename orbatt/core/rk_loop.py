@@ -40,7 +40,7 @@ import numpy as np
 
 from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, INTERPRETED,
                    borrow, borrow_model, jit, jit_inline, keepalive)
-from .gyrostat import has_ticks, next_tick, rhs_extended, rhs_extended_lanes, tick
+from .gyrostat import has_ticks, next_tick_grid, rhs_extended, rhs_extended_lanes, tick
 from .mode_events import advance as advance_modes, next_event, sequence_count
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
@@ -291,16 +291,20 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         bad_lane = -1
         t_brk = next_breakpoint(t, terms, params, table)
         t_tick = np.inf
+        t_grid = math.nan  # the time of the tick t_tick (its anomaly is t_tick: gyrostat._on_grid)
         if EXTENDED:
             if ticks:
-                t_tick = next_tick(t, terms, params)
+                t_tick, t_grid = next_tick_grid(t, terms, params)
         # --- mode sequences without a period (orbatt.core.mode_events): their transitions'
         # times are knots like the ticks, their conditions' crossings switching functions
         nseq = 0
         if SWITCHES and EXTENDED:
             nseq = sequence_count(terms, params)
             if nseq > 0:
-                t_tick = min(t_tick, next_event(t, y1, terms, params))
+                t_event = next_event(t, y1, terms, params)
+                if t_event < t_tick:
+                    t_tick = t_event
+                    t_grid = math.nan
         # --- the switching functions (orbatt.core.switches): references armed at t, the switch
         # located by an earlier call that the next steps land on (t_sw, function k_sw)
         nsw = 0
@@ -497,13 +501,13 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                     if t == t_tick:  # a tick: the laws evaluate on the state, which holds their commands
                         if LANES:
                             for l in range(nl):
-                                tick(t, yg[:, l], I[:, l], terms, params, table, work, False)
+                                tick(t, yg[:, l], I[:, l], terms, params, table, work, False, t_grid)
                             rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])
                         else:
-                            tick(t, y1, inertia, terms, params, table, work, False)
+                            tick(t, y1, inertia, terms, params, table, work, False, t_grid)
                             rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
                         cnt[CNT_NFEV] += 1
-                        t_tick = next_tick(t, terms, params)
+                        t_tick, t_grid = next_tick_grid(t, terms, params)
                 if SWITCHES and EXTENDED:
                     if nseq > 0:  # the continuous sequences: their flags, and a mode whose time came
                         mode_changed, _ = advance_modes(t, y1, inertia, terms, params, table, work, landed_seq,
@@ -514,7 +518,10 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                             loop_switch_values(t, y1, inertia, terms, params, table, work, gnew, nfac)
                             for k in range(nfac, nsw):
                                 work[SWITCH_SLOT + k] = gnew[k]
-                        t_tick = min(t_tick, next_event(t, y1, terms, params))
+                        t_event = next_event(t, y1, terms, params)
+                        if t_event < t_tick:
+                            t_tick = t_event
+                            t_grid = math.nan
                         if h_aim > 0.0:
                             hnew = min(hnew, h_aim)
                             h_aim = 0.0

@@ -159,7 +159,7 @@ class DOP853(Method):
         if (p.kernel.terms[0, km.FLAGS] & km.EXTENDED) and not resume.get("commands") and \
                 kg.has_ticks(self.kernel.terms, self.kernel.params):
             for e in range(E):
-                kg.tick(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], True)
+                kg.tick(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], True, math.nan)
                 # a mode sequence without a period takes its first mode's conditions as they are
                 kme.advance(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], -1, False,
                             ksw.REARM, True)
