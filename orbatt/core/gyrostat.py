@@ -519,6 +519,19 @@ def pd_row_target(j, t, terms, params, table, work):
     return pos, rate
 
 
+@jit_inline
+def mode_error_angle(t, q, m, terms, params, table, work, r, xhat, v):
+    """The attitude error angle (rad) of the PD law of mode ``m`` of the model's sequence at
+    the time ``t`` (orbit ``r, xhat, v``) and attitude ``q``; ``inf`` without one."""
+    angle = np.inf
+    for j in range(1, terms.shape[0]):
+        if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
+            aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
+            e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, aux, aux_rate)
+            angle = error_angle(e)
+    return angle
+
+
 @jit
 def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, jm, start, t_grid):
     """The mode sequence of row ``jm`` at a tick ``s`` (time ``t``) on the state ``y``: at the
@@ -551,13 +564,7 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
         if rate < np.inf:
             holds = math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]) < rate
         if settled < np.inf:
-            angle = np.inf
-            for j in range(1, terms.shape[0]):  # the attitude error of the mode's PD law
-                if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
-                    aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
-                    e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, aux, aux_rate)
-                    angle = error_angle(e)
-            holds = holds and angle < settled
+            holds = holds and mode_error_angle(t, q, m, terms, params, table, work, r, xhat, v) < settled
         if holds:
             if y[z + 3] == 0.0:
                 y[z + 2] = t

@@ -32,14 +32,14 @@ import numpy as np
 
 from ._jit import jit, jit_inline
 from . import control as ctl
-from .gyrostat import body_rate, error_angle, pd_row_target, wheel_row
+from .gyrostat import body_rate, mode_error_angle, wheel_row
 from .kepler import anomaly_of_time
-from .model import KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, PD_CONTROL, orbit_at
+from .model import KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, orbit_at
 from .qalg import qconj, qmul
 
 __all__ = ["is_continuous_sequence", "sequence_count", "condition_value", "mode_values", "advance", "next_event"]
 
-_CTL_PERIOD, _CTL_Z0, _CTL_MODE = ctl.CTL_PERIOD, ctl.CTL_Z0, ctl.CTL_MODE
+_CTL_PERIOD, _CTL_Z0 = ctl.CTL_PERIOD, ctl.CTL_Z0
 _MD_COUNT, _MD_COND, _MD_FIELDS = ctl.MODES.count, ctl.MODES.conditions, ctl.MODE_FIELDS
 _MD_TIME, _MD_RATE, _MD_SETTLED, _MD_HOLD = (ctl.MODE_UNTIL_TIME, ctl.MODE_UNTIL_RATE, ctl.MODE_UNTIL_SETTLED,
                                              ctl.MODE_HOLD)
@@ -85,14 +85,8 @@ def condition_value(t, q, omega, jm, m, terms, params, table, work, r, xhat, v):
     g = -np.inf
     if rate < np.inf:
         g = max(g, math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]) / rate - 1.0)
-    if settled < np.inf:
-        angle = np.inf
-        for j in range(1, terms.shape[0]):  # the attitude error of the mode's PD law
-            if terms[j, KIND] == PD_CONTROL and params[terms[j, P0] + _CTL_MODE] == float(m):
-                aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
-                e, _ = ctl.pd_error(q, params, terms[j, P0], r, xhat, v, aux, aux_rate)
-                angle = error_angle(e)
-        g = max(g, angle / settled - 1.0)
+    if settled < np.inf:  # the attitude error of the mode's PD law
+        g = max(g, mode_error_angle(t, q, m, terms, params, table, work, r, xhat, v) / settled - 1.0)
     return g
 
 
