@@ -138,3 +138,23 @@ def test_a_continuous_sequence_through_the_api():
     pd = orbatt.PDControl("inertial", kp=2e-5 * u.N * u.m, kd=5e-4 * u.N * u.m * u.s, target_q=[1, 0, 0, 0])
     seq = ModeSequence([Mode("a", pd, until_time=50 * u.s), Mode("b", pd)], period=None)
     assert seq.period is None and "continuous" in repr(seq)
+
+
+def test_facets_and_a_shadow_switch_beside_the_sequence():
+    """The shipped mission (drag and SRP on six facets, a conical shadow: 15 switching functions
+    of the terms) without its period: the sequence's function follows the terms' (its index
+    offset), the detumble's end is located between the outputs, and |omega| there is the
+    threshold to the runs' reproducibility (the facets' edge-on arcs, integrated across their
+    kinks while disarmed, make two runs on other output grids differ by ~1e-7)."""
+    from orbatt.shipped import shipped_file
+
+    text = shipped_file("cubesat-mission-modes").read_text()
+    text = re.sub(r'\nperiod = "1 s"[^\n]*\n', "\n", text, count=1)
+    text = re.sub(r't_end = "[^"]*"', 't_end = "4000 s"', text)
+    ds = orbatt.Scenario(parse(text, "continuous-mission.toml")).run()
+    entry = ds["mode_entry_time"].values
+    t_cross = float(entry[1]) - 60.0  # (until_rate = 0.5 deg/s held for 60 s)
+    assert 1000.0 < t_cross < 3900.0 and t_cross % 30.0 != 0.0
+    end = orbatt.Scenario(parse(_ending_at(text, t_cross), "to_crossing.toml")).run()
+    w = np.linalg.norm(end["omega"].values[-1])
+    assert abs(w / math.radians(0.5) - 1.0) < 1e-5
