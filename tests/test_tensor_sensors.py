@@ -148,34 +148,10 @@ def test_a_scenario_with_a_tensor_sensors_and_limits_runs_in_the_body_frame():
     the scenario runs; the law on the estimate
     keeps the torque within max_torque on each body axis and reaches it, the knowledge error
     stays within 3 knowledge_sigma once the slew is over (after 60 s), and the slew ends within 1 deg of its target."""
-    import re
-
     from orbatt.scenario import Scenario, parse
-    from orbatt.shipped import shipped_file
+    from tensor_support import tensor_slew_text
 
-    text = shipped_file("cubesat-slew-wheels").read_text().replace('period = "0.1 s"\n', '''period = "0.1 s"
-
-[sensors]
-seed = 7
-
-[sensors.gyro]
-rate = "10 Hz"
-arw = "0.15 deg/sqrt(h)"
-bias = ["5 deg/h", "-3 deg/h", "2 deg/h"]
-
-[sensors.star_tracker]
-rate = "1 Hz"
-noise = "10 arcsec"
-
-[estimator]
-kind = "mekf"
-attitude_sigma = "0.1 deg"
-bias_sigma = "10 deg/h"
-''', 1)
-    text = text.replace('inertia = ["0.13 kg m2", "0.11 kg m2", "0.05 kg m2"]',
-                        'inertia = ["0.13 kg m2", "0.11 kg m2", "0.05 kg m2", "0.003 kg m2", "-0.002 kg m2", '
-                        '"0.001 kg m2"]', 1)
-    text = re.sub(r't_end = "[^"]*"', 't_end = "150 s"', text).replace('max_rate = "1 deg/s"\n', "", 1)
+    text = tensor_slew_text("150 s", sensors=True).replace('max_rate = "1 deg/s"\n', "", 1)
     sc = Scenario(parse(text, "tensor-slew.toml"))
     assert sc.body.frame is not None
     ds = sc.run()

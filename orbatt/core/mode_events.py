@@ -120,10 +120,12 @@ def _reached(s, t, te, terms, params):
 
 
 @jit
-def advance(s, y, inertia, terms, params, table, work, landed, now_holds, band, start):
+def advance(s, y, inertia, terms, params, table, work, g_now, landed, now_holds, band, start):
     """The continuous sequences at ``s`` (an accepted step end, or the run's start) on the
     state ``y`` (module docstring): their conditions' flags, then each mode whose time has come
-    left for the next. ``landed``: the index (among the continuous sequences) of the one whose
+    left for the next. ``g_now``: the sequences' switching functions at ``s`` on ``y``
+    (:func:`mode_values`, which the step loop has evaluated there already; not read at the
+    ``start``); ``landed``: the index (among the continuous sequences) of the one whose
     switching function the step ended on (-1: none), ``now_holds`` whether its conditions hold
     past that crossing; ``band``: the anti-chatter band of :mod:`orbatt.core.switches`;
     ``start``: take the conditions as they are. Returns ``(mode_changed, flag_changed)``."""
@@ -147,7 +149,10 @@ def advance(s, y, inertia, terms, params, table, work, landed, now_holds, band, 
             if m >= count - 1:
                 break
             c = p0 + _MD_COND + _MD_FIELDS * m
-            g = condition_value(t, q, omega, j, m, terms, params, table, work, r, xhat, v)
+            if first and not start:  # the current mode's: the loop's value at this step end
+                g = g_now[i]
+            else:  # a mode just begun (or the start): its own conditions
+                g = condition_value(t, q, omega, j, m, terms, params, table, work, r, xhat, v)
             if g == g:
                 holds = y[z + 3] == 1.0
                 if first and i == landed:  # the crossing the loop landed on: its direction

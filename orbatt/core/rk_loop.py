@@ -510,8 +510,9 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         t_tick, t_grid = next_tick_grid(t, terms, params)
                 if SWITCHES and EXTENDED:
                     if nseq > 0:  # the continuous sequences: their flags, and a mode whose time came
-                        mode_changed, _ = advance_modes(t, y1, inertia, terms, params, table, work, landed_seq,
-                                                        now_holds, REARM, False)
+                        # (gnew holds the functions at t on y1: this step end's, or the landing's)
+                        mode_changed, _ = advance_modes(t, y1, inertia, terms, params, table, work, gnew[nfac:nsw],
+                                                        landed_seq, now_holds, REARM, False)
                         if mode_changed:  # the new mode's law from here, its conditions armed
                             rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
                             cnt[CNT_NFEV] += 1

@@ -161,8 +161,8 @@ class DOP853(Method):
             for e in range(E):
                 kg.tick(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], True, math.nan)
                 # a mode sequence without a period takes its first mode's conditions as they are
-                kme.advance(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], -1, False,
-                            ksw.REARM, True)
+                kme.advance(self.ST[e, kd.ST_T], self.Y[e], p.inertia[e], *self.kernel, self.WORK[e], np.empty(0), -1,
+                            False, ksw.REARM, True)
             self.y_start = self.Y.copy()
         if p.step_ends:
             self.rec_t = np.empty(256)

@@ -108,8 +108,10 @@ def test_until_time_and_until_settled():
         assert np.all(err[k - 30:k + 1] < math.radians(2.0) + 1e-9) and mode[k] == 2
 
 
-def test_pause_and_resume_and_an_ensemble_keep_the_sequence_bitwise(monkeypatch):
-    sc = orbatt.Scenario(parse(_text(t_end="400 s", output_step="10 s", rate="3 deg/s"), "m.toml"))
+def chunked_and_ensemble_runs(sc, monkeypatch):
+    """``(once, ens)``: scenario ``sc`` run once, checked bitwise against the same run paused
+    after every call, and a two-member ensemble (the second member's momentum 0.9 times)
+    whose first member is checked bitwise against it."""
     once = orbatt.propagate(sc.body, sc.state0, sc.potential, sc.times, rtol=1e-9, atol=1e-9)
     import orbatt.propagation as prop
 
@@ -124,6 +126,12 @@ def test_pause_and_resume_and_an_ensemble_keep_the_sequence_bitwise(monkeypatch)
     ens = orbatt.propagate(sc.body, orbatt.State(sc.body, q, Q), sc.potential, sc.times, rtol=1e-9, atol=1e-9)
     np.testing.assert_array_equal(ens.q[0], once.q)
     np.testing.assert_array_equal(ens.command[0], once.command)
+    return once, ens
+
+
+def test_pause_and_resume_and_an_ensemble_keep_the_sequence_bitwise(monkeypatch):
+    chunked_and_ensemble_runs(orbatt.Scenario(parse(_text(t_end="400 s", output_step="10 s", rate="3 deg/s"),
+                                                    "m.toml")), monkeypatch)
 
 
 def test_mode_sequences_are_checked_where_they_enter():

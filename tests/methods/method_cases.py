@@ -16,6 +16,7 @@ from orbatt.core import model as km
 from orbatt.core import kepler
 from orbatt.core import potentials as kp
 from orbatt.core import splitting as ks
+from orbatt.core.hamiltonian import rhs
 
 # ---------------------------------------------------------------------------------------
 # Problems: the paper's data (docs/design.md §9)
@@ -122,8 +123,9 @@ def classical_reference(body, state, kind, params, t, rtol=1e-13):
 
 
 def run_dop853(t_out, inertia=I_FREE, kind=0, params=NO_PARAMS, rtol=1e-10, atol=1e-12, max_step=np.inf, y0=Y0,
-               budget=10**9, h0=0.0):
-    """The compiled DOP853 kernel from ``y0`` at ``t = 0`` to the times ``t_out``."""
+               budget=10**9, h0=0.0, advance=kd.advance):
+    """The compiled DOP853 kernel (or another pair's loop, ``advance``: ``kd.advance_dopri5``
+    ...) from ``y0`` at ``t = 0`` to the times ``t_out``."""
     y = y0.copy()
     st, cnt, f0 = kd.new_state()
     st[kd.ST_H] = h0
@@ -131,10 +133,36 @@ def run_dop853(t_out, inertia=I_FREE, kind=0, params=NO_PARAMS, rtol=1e-10, atol
     work = kp.new_work()
     status = kd.PAUSED
     while status == kd.PAUSED:
-        status = kd.advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, inertia,
-                            *km.from_spec(kind, params, EMPTY), work, rtol, atol, max_step, 10**9, budget)
+        status = advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, inertia,
+                         *km.from_spec(kind, params, EMPTY), work, rtol, atol, max_step, 10**9, budget)
     assert status == kd.DONE
     return out, cnt
+
+
+def free_rhs(inertia=I_FREE):
+    """``f(t, y)``: the compiled right-hand side of the torque-free body (a fresh array)."""
+    model = km.from_spec(0, NO_PARAMS, EMPTY)
+    work = kp.new_work()
+
+    def f(t, y):
+        out = np.empty(8)
+        rhs(t, y, inertia, *model, work, out)
+        return out
+    return f
+
+
+def tableau_steps(f, h, n, tab, stages=None, y0=Y0):
+    """``y`` after ``n`` steps ``h`` from ``y0`` at ``t = 0`` of the explicit tableau of the
+    coefficients module ``tab`` (``C``, ``A``, ``B``), evaluated in numpy: its first ``stages``
+    stages (default all; a pair whose last stage is the next step's first leaves it out)."""
+    stages = tab.N_STAGES if stages is None else stages
+    y = y0.copy()
+    K = np.zeros((tab.N_STAGES, y.shape[0]))
+    for k in range(n):
+        for s in range(stages):
+            K[s] = f(k * h + tab.C[s] * h, y + h * (tab.A[s, :s] @ K[:s]))
+        y = y + h * (tab.B @ K)
+    return y
 
 
 def run_fixed(t_out, h, comp="strang", kinetic="axes", inertia=I_FREE, kind=0, params=NO_PARAMS, method=ks.SPLITTING,

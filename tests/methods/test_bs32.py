@@ -11,14 +11,11 @@ from fractions import Fraction as F
 
 import numpy as np
 import pytest
-from method_cases import I_FREE, Y0, angle, exact_free
+from method_cases import I_FREE, Y0, angle, exact_free, free_rhs, run_dop853, tableau_steps
 
 import orbatt
 from orbatt.core import bs32_coefficients as bc
 from orbatt.core import dop853 as kd
-from orbatt.core import model as km
-from orbatt.core import potentials as kp
-from orbatt.core.hamiltonian import rhs
 from orbatt.methods import METHODS, Bs32, Bs32Lanes, methods
 from orbatt.methods.base import resolve_method
 from orbatt.scenario import parse
@@ -61,50 +58,21 @@ def test_coefficients_are_the_published_rationals_and_have_orders_3_and_2():
     assert kd.TABLEAUS["bs32"][0] == 4 and kd.TABLEAUS["dopri5"][0] == 7
 
 
-def _f():
-    model = km.from_spec(0, np.zeros(1), np.zeros((0, 0)))
-    work = kp.new_work()
-
-    def f(t, y):
-        out = np.empty(8)
-        rhs(t, y, I_FREE, *model, work, out)
-        return out
-    return f
-
-
-def _run_kernel(t_out, rtol, atol=None, max_step=np.inf, h0=0.0):
-    y = Y0.copy()
-    st, cnt, f0 = kd.new_state()
-    st[kd.ST_H] = h0
-    out = np.zeros((len(t_out), 8))
-    status = kd.advance_bs32(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, I_FREE,
-                             *km.from_spec(0, np.zeros(1), np.zeros((0, 0))), kp.new_work(), rtol,
-                             rtol if atol is None else atol, max_step, 10**9, 10**9)
-    assert status == kd.DONE
-    return out, cnt
-
-
 def test_loop_is_the_tableau_with_fixed_steps_and_converges_with_order_3():
     """Loose tolerances and ``max_step = T / n``: ``n`` steps of 3 evaluations (the fourth
     stage is the next step's first), equal to round-off to a numpy evaluation of the tableau;
     the global error at ``T`` against the exact free body falls as ``h^3`` (slopes in 2.9-3.1
     over n = 256 -> 2048)."""
     T = 12.0
-    f = _f()
+    f = free_rhs()
     q, _ = exact_free([T])
     ns = (256, 512, 1024, 2048)
     errs = []
     for n in ns:
-        out, cnt = _run_kernel([T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n)
+        out, cnt = run_dop853([T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n, advance=kd.advance_bs32)
         assert cnt[kd.CNT_REJECTED] == 0 and cnt[kd.CNT_STEPS] == n and cnt[kd.CNT_NFEV] == 3 * n + 1
         if n == 256:
-            y = Y0.copy()
-            h = T / n
-            K = np.zeros((bc.N_STAGES, 8))
-            for k in range(n):
-                for s in range(bc.N_STAGES - 1):
-                    K[s] = f(k * h + bc.C[s] * h, y + h * (bc.A[s, :s] @ K[:s]))
-                y = y + h * (bc.B @ K)
+            y = tableau_steps(f, T / n, n, bc, stages=bc.N_STAGES - 1)
             np.testing.assert_allclose(out[-1], y, rtol=0, atol=1e-13)
         errs.append(angle(out[-1, :4], q[0]))
     slopes = np.diff(np.log2(errs)) / -np.diff(np.log2(ns))
@@ -115,7 +83,7 @@ def test_embedded_estimate_has_order_2():
     """One step of size ``h`` from ``Y0``: the local error of ``y_new`` (order 3) falls as
     ``h^4``, the estimate ``h E . K`` and the local error of ``y_hat = y_new - h E . K`` (order 2)
     as ``h^3``, and the estimate tracks the embedded solution's error (ratio -> 1)."""
-    f = _f()
+    f = free_rhs()
     hs = 0.2 / 2.0 ** np.arange(4)
     err_new, err_hat, est = [], [], []
     for h in hs:

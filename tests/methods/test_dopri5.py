@@ -10,14 +10,11 @@ from fractions import Fraction as F
 
 import numpy as np
 import pytest
-from method_cases import I_FREE, Y0, angle, exact_free
+from method_cases import angle, exact_free, free_rhs, run_dop853, tableau_steps
 
 import orbatt
 from orbatt.core import dop853 as kd
 from orbatt.core import dopri5_coefficients as dc
-from orbatt.core import model as km
-from orbatt.core import potentials as kp
-from orbatt.core.hamiltonian import rhs
 from orbatt.methods import METHODS, Dopri5
 from orbatt.methods.base import resolve_method
 from orbatt.scenario import parse
@@ -72,17 +69,6 @@ def test_coefficients_are_the_published_rationals_and_have_orders_5_and_4():
     assert kd.TABLEAUS["dopri5"][0] == 7 and kd.TABLEAUS["dop853"][0] == 12 and kd.TABLEAUS["verner98"][0] == 16
 
 
-def _run_kernel(advance, t_out, rtol, atol=None, max_step=np.inf, h0=0.0):
-    y = Y0.copy()
-    st, cnt, f0 = kd.new_state()
-    st[kd.ST_H] = h0
-    out = np.zeros((len(t_out), 8))
-    status = advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, I_FREE,
-                     *km.from_spec(0, np.zeros(1), np.zeros((0, 0))), kp.new_work(), rtol,
-                     rtol if atol is None else atol, max_step, 10**9, 10**9)
-    assert status == kd.DONE
-    return out, cnt
-
 
 def test_loop_is_the_tableau_with_fixed_steps_and_converges_with_order_5():
     """Loose tolerances and ``max_step = T / n``: the loop takes ``n`` steps of 6 evaluations
@@ -90,28 +76,16 @@ def test_loop_is_the_tableau_with_fixed_steps_and_converges_with_order_5():
     evaluation of the tableau; the global error at ``T`` against the exact free body falls as
     ``h^5`` (slope between 4.8 and 5.2 over n = 128 -> 1024; pre-asymptotic below)."""
     T = 12.0
-    model = km.from_spec(0, np.zeros(1), np.zeros((0, 0)))
-    work = kp.new_work()
-
-    def f(t, y):
-        out = np.empty(8)
-        rhs(t, y, I_FREE, *model, work, out)
-        return out
+    f = free_rhs()
 
     q, _ = exact_free([T])
     ns = (128, 256, 512, 1024)
     errs = []
     for n in ns:
-        out, cnt = _run_kernel(kd.advance_dopri5, [T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n)
+        out, cnt = run_dop853([T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n, advance=kd.advance_dopri5)
         assert cnt[kd.CNT_REJECTED] == 0 and cnt[kd.CNT_STEPS] == n and cnt[kd.CNT_NFEV] == 6 * n + 1
         if n == 128:
-            y = Y0.copy()
-            h = T / n
-            K = np.zeros((dc.N_STAGES, 8))
-            for k in range(n):
-                for s in range(dc.N_STAGES - 1):
-                    K[s] = f(k * h + dc.C[s] * h, y + h * (dc.A[s, :s] @ K[:s]))
-                y = y + h * (dc.B @ K)
+            y = tableau_steps(f, T / n, n, dc, stages=dc.N_STAGES - 1)
             np.testing.assert_allclose(out[-1], y, rtol=0, atol=1e-13)
         errs.append(angle(out[-1, :4], q[0]))
     slopes = np.diff(np.log2(errs)) / -np.diff(np.log2(ns))

@@ -5,27 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from method_cases import GG, I_FREE, PERIOD, Y0, angle, exact_free, random_data
+from method_cases import GG, PERIOD, angle, exact_free, free_rhs, random_data, run_dop853, tableau_steps
 
 import orbatt
 from orbatt import canonical
 from orbatt.core import dop853 as kd
-from orbatt.core import model as km
-from orbatt.core import potentials as kp
 from orbatt.core import verner98_coefficients as vc
-from orbatt.core.hamiltonian import rhs
 
-
-def _run_kernel(advance, t_out, rtol, atol=None, max_step=np.inf, h0=0.0):
-    y = Y0.copy()
-    st, cnt, f0 = kd.new_state()
-    st[kd.ST_H] = h0
-    out = np.zeros((len(t_out), 8))
-    status = advance(y, st, cnt, f0, np.asarray(t_out, dtype=float), np.empty(0), out, False, I_FREE,
-                     *km.from_spec(0, np.zeros(1), np.zeros((0, 0))), kp.new_work(), rtol,
-                     rtol if atol is None else atol, max_step, 10**9, 10**9)
-    assert status == kd.DONE
-    return out, cnt
 
 
 def test_vern98_loop_is_the_tableau_with_fixed_steps():
@@ -35,27 +21,14 @@ def test_vern98_loop_is_the_tableau_with_fixed_steps():
     against the exact solution falls with n (the order itself is checked on the coefficients,
     tests/core/test_verner98.py: the free body is pre-asymptotic here, ~8.4 over n = 8 -> 32)."""
     T = 12.0
-    model = km.from_spec(0, np.zeros(1), np.zeros((0, 0)))
-    work = kp.new_work()
-
-    def f(t, y):
-        out = np.empty(8)
-        rhs(t, y, I_FREE, *model, work, out)
-        return out
+    f = free_rhs()
 
     q, _ = exact_free([T])
     errs = []
     for n in (8, 16, 32):
-        out, cnt = _run_kernel(kd.advance_verner98, [T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n)
+        out, cnt = run_dop853([T], rtol=1.0, atol=1.0, max_step=T / n, h0=T / n, advance=kd.advance_verner98)
         assert cnt[kd.CNT_REJECTED] == 0 and cnt[kd.CNT_STEPS] == n and cnt[kd.CNT_NFEV] == 16 * n + 1
-        y = Y0.copy()
-        h = T / n
-        K = np.zeros((vc.N_STAGES, 8))
-        for k in range(n):
-            for s in range(vc.N_STAGES):
-                K[s] = f(k * h + vc.C[s] * h, y + h * (vc.A[s, :s] @ K[:s]))
-            y = y + h * (vc.B @ K)
-        np.testing.assert_allclose(out[-1], y, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(out[-1], tableau_steps(f, T / n, n, vc), rtol=0, atol=1e-13)
         errs.append(angle(out[-1, :4], q[0]))
     assert np.log2(errs[0] / errs[-1]) / 2 > 7.5, errs
 
@@ -112,8 +85,8 @@ def test_vern98_ensemble_is_bitwise_one_by_one(sat):
 def test_vern98_dop853_tableau_unchanged():
     """The DOP853 loop runs the DOP853 tableau; the pairs differ."""
     assert kd.TABLEAUS["dop853"][0] == 12 and kd.TABLEAUS["verner98"][0] == 16
-    a, _ = _run_kernel(kd.advance, [5.0], rtol=1e-10)
-    b, _ = _run_kernel(kd.advance_verner98, [5.0], rtol=1e-10)
+    a, _ = run_dop853([5.0], rtol=1e-10, atol=1e-10)
+    b, _ = run_dop853([5.0], rtol=1e-10, atol=1e-10, advance=kd.advance_verner98)
     assert 0.0 < angle(a[-1, :4], b[-1, :4]) < 1e-8
 
 
