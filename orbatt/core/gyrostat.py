@@ -249,16 +249,6 @@ def rhs_extended(s, y, inertia, terms, params, table, work, dy):
 
 
 @jit
-def rhs_extended_lanes(s, Y, nl, I, terms, params, table, work, dY):
-    """:func:`rhs_extended` for lanes ``0..nl-1`` of ``Y (n, L)`` (inertia ``I (3, L)``) at the
-    common ``s``, into ``dY (n, L)``: the orbit evaluated once for the group, then each lane's
-    operations of :func:`rhs_extended`, exactly (a lane's column is its state)."""
-    t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
-    for l in range(nl):
-        extended_rates(t, dtds, r, xhat, v, Y[:, l], I[:, l], terms, params, table, work, dY[:, l])
-
-
-@jit
 def evaluate_extended(t, Y, inertia, terms, params, table, work):
     """At the times ``t (N,)`` and states ``Y (N, 8 + n)``: the body rate ``omega (N, 3)``, the
     wheels' momentum ``h (N, 3)`` (body axes), the torque the control applies to the body

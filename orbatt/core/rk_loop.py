@@ -25,7 +25,7 @@ instantiation  one trajectory                                lanes
 =============  ============================================  ==============================================
 rigid body     :func:`~orbatt.core.hamiltonian.rhs` (stages  :func:`~orbatt.core.hamiltonian.rhs_lanes`
                inline: ``rhs_inline``)
-extended       :func:`~orbatt.core.gyrostat.rhs_extended`    :func:`~orbatt.core.gyrostat.rhs_extended_lanes`
+extended       :func:`~orbatt.core.gyrostat.rhs_extended`    :func:`~orbatt.core.gyrostat_lanes.rhs_extended_lanes`
 coupled        :func:`~orbatt.core.mutual.rhs_coupled`       (not instantiated)
 =============  ============================================  ==============================================
 
@@ -40,7 +40,8 @@ import numpy as np
 
 from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, INTERPRETED,
                    borrow, borrow_model, jit, jit_inline, keepalive)
-from .gyrostat import has_ticks, next_tick_grid, rhs_extended, rhs_extended_lanes, tick
+from .gyrostat import has_ticks, next_tick_grid, rhs_extended, tick
+from .gyrostat_lanes import LANE_SCRATCH, rhs_extended_lanes
 from .mode_events import advance as advance_modes, next_event, sequence_count
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
@@ -175,6 +176,8 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             Kown = np.empty((N_STAGES + 1, ncomp, nl))
             tmpown = np.empty((3, ncomp, nl))
             K = borrow(Kown)
+            xown = np.empty((LANE_SCRATCH, nl))  # the extended lanes' scratch
+            S = borrow(xown)
             yg = borrow(tmpown[0])
             ytmp = borrow(tmpown[1])
             ynew = borrow(tmpown[2])
@@ -184,6 +187,8 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             Kown = np.empty((N_STAGES + 1, ncomp))
             tmpown = np.empty((3, ncomp))
             K1 = borrow(Kown)
+            xown = np.empty((1, 1))
+            S = borrow(xown)
             y1 = borrow(tmpown[0])
             ytmp1 = borrow(tmpown[1])
             ynew1 = borrow(tmpown[2])
@@ -229,7 +234,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         if (flags & FLAG_F0_VALID) == 0:
             if LANES:
                 if EXTENDED:
-                    rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])
+                    rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0], S)
                 else:
                     rhs_lanes(t, yg, nl, I, terms, params, table, work, G, K[0])
             elif COUPLED:
@@ -258,7 +263,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         ytmp[i, l] = yg[i, l] + h0 * K[0, i, l]
                 if LANES:
                     if EXTENDED:
-                        rhs_extended_lanes(t + h0, ytmp, nl, I, terms, params, table, work, K[1])
+                        rhs_extended_lanes(t + h0, ytmp, nl, I, terms, params, table, work, K[1], S)
                     else:
                         rhs_lanes(t + h0, ytmp, nl, I, terms, params, table, work, G, K[1])
                 elif COUPLED:
@@ -345,7 +350,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         ts = t_new
                 if LANES:
                     if EXTENDED:
-                        rhs_extended_lanes(ts, ytmp, nl, I, terms, params, table, work, K[s])
+                        rhs_extended_lanes(ts, ytmp, nl, I, terms, params, table, work, K[s], S)
                     else:
                         rhs_lanes(ts, ytmp, nl, I, terms, params, table, work, G, K[s])
                 elif COUPLED:
@@ -421,7 +426,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                 elif not at_tick:
                     if LANES:
                         if EXTENDED:
-                            rhs_extended_lanes(t_new, ynew, nl, I, terms, params, table, work, K[N_STAGES])
+                            rhs_extended_lanes(t_new, ynew, nl, I, terms, params, table, work, K[N_STAGES], S)
                         else:
                             rhs_lanes(t_new, ynew, nl, I, terms, params, table, work, G, K[N_STAGES])
                     elif COUPLED:
@@ -502,7 +507,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         if LANES:
                             for l in range(nl):
                                 tick(t, yg[:, l], I[:, l], terms, params, table, work, False, t_grid)
-                            rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0])
+                            rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0], S)
                         else:
                             tick(t, y1, inertia, terms, params, table, work, False, t_grid)
                             rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
@@ -573,6 +578,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         keepalive(tmpown)
         keepalive(sown)
         keepalive(swown)
+        keepalive(xown)
         return status
 
     return jit(advance)
