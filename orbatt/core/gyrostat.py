@@ -360,21 +360,23 @@ def next_tick(s, terms, params):
     """The first flight-software tick after ``s`` of the model's laws, in the step loops'
     independent variable (the time, or the eccentric anomaly: :func:`orbit_at`); ``inf`` if
     none. The step loops land on it as on a breakpoint."""
-    return next_tick_grid(s, terms, params)[0]
+    return next_tick_grid(s, terms, params, math.nan)[0]
 
 
 @jit
-def next_tick_grid(s, terms, params):
+def next_tick_grid(s, terms, params, t_grid):
     """``(s_k, t_k)``: :func:`next_tick` and its time (what :func:`tick` takes as ``t_grid``);
     ``(inf, nan)`` if none. Rows whose ticks fall at the same time share one solution of
-    Kepler's equation."""
+    Kepler's equation. ``t_grid``: the time of the tick ``s`` is (the step loop landed on it;
+    spares the map from ``s`` to the time), NaN if unknown: the same result either way (from a
+    time rounded below the tick, the tick's own anomaly ``s`` is passed over below)."""
     best = np.inf
     best_t = math.nan
     last_t = math.nan
     last_s = math.nan
     kind0 = terms[0, KIND]
     orb = params[terms[0, P0]:terms[0, P1]]
-    t = time_of_s(s, terms, params)
+    t = t_grid if t_grid == t_grid else time_of_s(s, terms, params)
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
         if not is_flight_software(kind):

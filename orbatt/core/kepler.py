@@ -134,7 +134,9 @@ def _solve_cold(M, e):
     m, k = _reduce(M)
     if e == 0.0:
         return m, math.sin(m), math.cos(m), k
-    E = m + 0.85 * e * (1.0 if math.sin(m) >= 0.0 else -1.0)
+    # Danby's sign(sin m) from m itself (no sin call): sin m >= 0 on [0, pi] (the double pi lies
+    # below pi) and below -pi, where the reduction's rounding may leave m
+    E = m + 0.85 * e * (1.0 if (0.0 <= m <= math.pi) or m < -math.pi else -1.0)
     E, s, c = _halley(m, e, E, math.sin(E), math.cos(E))
     return E, s, c, k
 
