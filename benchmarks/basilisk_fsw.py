@@ -16,7 +16,8 @@ the law's ``max_torque`` (4e-3 N m per axis) removed, so that on both sides only
 5e-3 N m limit acts (the law does not reach either here).
 
 * orbatt: the scenario as loaded, ``dop853`` at its rtol = atol = 1e-10, and the same run with
-  ``dopri5`` and ``bs32`` (Bogacki-Shampine 3(2): one step of 3 right-hand sides per tick) at
+  ``dopri5`` and ``bs32`` (Bogacki-Shampine 3(2): one step of 3 right-hand sides per tick, the
+  derivative after the tick its last stage's with the wheels' rows rewritten) at
   rtol 1e-10 and ``bs32`` at 1e-12 (:data:`SINGLE_RUNS`), each with its error against
   ``dop853`` at rtol 1e-13; timed: ``propagate`` (compiled, warm) and ``Scenario.run()`` (the
   Dataset too).

@@ -29,7 +29,7 @@ Methods (``method=``; :data:`METHODS` lists them, :func:`methods` describes them
 ``"bs32"`` (:mod:`.dop853`)
     Bogacki-Shampine 3(2) (4 stages, FSAL) in the same compiled loop and options as ``"dop853"``.
     For flight software at a period so dense that one step of order 3 per tick meets the
-    tolerance: 4 right-hand sides per tick against 12 of ``"dop853"`` on the 10 Hz LVLH hold
+    tolerance: 3 right-hand sides per tick against 12 of ``"dop853"`` on the 10 Hz LVLH hold
     (``benchmarks/basilisk_fsw.py``); far slower than ``"dop853"`` without ticks or at tight
     tolerances.
 ``"dop853-lanes"`` (:mod:`.dop853`)

@@ -335,8 +335,10 @@ class Bs32(DOP853):
     """Bogacki-Shampine 3(2) (4 stages, FSAL inside the tableau: :mod:`orbatt.core.bs32_coefficients`)
     in the compiled step loop of :class:`DOP853` (controller exponent 1/3; error ``|h| rms((b -
     bhat) . K / sk)``); lands on every output time. For flight software at a dense period, where
-    one step of order 3 per tick meets the tolerance: 4 right-hand sides per tick (3 stages and the
-    derivative after the tick) against DOP853's 12 (``benchmarks/basilisk_fsw.py``)."""
+    one step of order 3 per tick meets the tolerance: 3 right-hand sides per tick (the stages; the
+    derivative after the tick is the last stage's with, for PD laws on the wheels only, its wheels'
+    rows rewritten: :mod:`orbatt.core.held_commands`; 4 with other laws) against DOP853's 12
+    (``benchmarks/basilisk_fsw.py``)."""
 
     name = "bs32"
     order = 3
