@@ -101,8 +101,14 @@ def body_rate(g, y, inertia, params, w0):
         h0 += hk * a0
         h1 += hk * a1
         h2 += hk * a2
-    x0, x1, x2 = g[0] - h0, g[1] - h1, g[2] - h2
-    # J^-1 x by cofactors (J symmetric positive definite)
+    return cofactor_solve(j00, j11, j22, j01, j02, j12, (g[0] - h0, g[1] - h1, g[2] - h2)), (h0, h1, h2)
+
+
+@jit_inline
+def cofactor_solve(j00, j11, j22, j01, j02, j12, x):
+    """``J^-1 x`` for the symmetric positive definite ``J`` of entries ``j..``, by cofactors (the
+    operations :func:`body_rate` and the lanes' form, :mod:`orbatt.core.held_commands`, share)."""
+    x0, x1, x2 = x
     c00 = j11 * j22 - j12 * j12
     c01 = j02 * j12 - j01 * j22
     c02 = j01 * j12 - j02 * j11
@@ -111,7 +117,7 @@ def body_rate(g, y, inertia, params, w0):
     c22 = j00 * j11 - j01 * j01
     det = j00 * c00 + j01 * c01 + j02 * c02
     return ((c00 * x0 + c01 * x1 + c02 * x2) / det, (c01 * x0 + c11 * x1 + c12 * x2) / det,
-            (c02 * x0 + c12 * x1 + c22 * x2) / det), (h0, h1, h2)
+            (c02 * x0 + c12 * x1 + c22 * x2) / det)
 
 
 @jit_inline

@@ -34,7 +34,7 @@ import math
 from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
-from .gyrostat import body_rate, extended_rates, is_flight_software, row_active, wheel_count, wheel_row
+from .gyrostat import body_rate, cofactor_solve, extended_rates, is_flight_software, row_active, wheel_count, wheel_row
 from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, MOMENTUM_DUMP, P0, PD_CONTROL, R0, R1, orbit_at, terms_lanes)
 from .qalg import cross, qconj, qmul, qmul_pure, rotate_inv
 from .torques import gradient_of_torque
@@ -108,18 +108,8 @@ def _body_rates(Y, nl, I, params, w0, nw, S):
             H[1, l] += hk * a1
             H[2, l] += hk * a2
     for l in range(nl):
-        j00, j11, j22, j01, j02, j12 = J[0, l], J[1, l], J[2, l], J[3, l], J[4, l], J[5, l]
-        x0, x1, x2 = X[0, l] - H[0, l], X[1, l] - H[1, l], X[2, l] - H[2, l]
-        c00 = j11 * j22 - j12 * j12
-        c01 = j02 * j12 - j01 * j22
-        c02 = j01 * j12 - j02 * j11
-        c11 = j00 * j22 - j02 * j02
-        c12 = j01 * j02 - j00 * j12
-        c22 = j00 * j11 - j01 * j01
-        det = j00 * c00 + j01 * c01 + j02 * c02
-        OM[0, l] = (c00 * x0 + c01 * x1 + c02 * x2) / det
-        OM[1, l] = (c01 * x0 + c11 * x1 + c12 * x2) / det
-        OM[2, l] = (c02 * x0 + c12 * x1 + c22 * x2) / det
+        OM[0, l], OM[1, l], OM[2, l] = cofactor_solve(J[0, l], J[1, l], J[2, l], J[3, l], J[4, l], J[5, l],
+                                                      (X[0, l] - H[0, l], X[1, l] - H[1, l], X[2, l] - H[2, l]))
 
 
 @jit_inline

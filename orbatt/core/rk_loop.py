@@ -44,13 +44,13 @@ from .gyrostat import extended_rates, has_ticks, next_tick_grid, rhs_extended, t
 from .held_commands import LANE_SCRATCH, rhs_extended_lanes, wheel_command_rates, wheel_ticks_only
 from .mode_events import advance as advance_modes, next_event, sequence_count
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
-from .model import next_breakpoint, orbit_at
+from .model import next_breakpoint
 from .mutual import C_ATOL, hinit_der2_vec, hinit_norms_vec, rhs_coupled
 from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES, ST_FACOLD, ST_H, ST_HMIN,
                            ST_SWITCH_K, ST_SWITCH_T, ST_T, PAIRS, TABLEAUS, accept_step, all_finite, begin_attempt,
                            controller, controller9, controller_pow, error_norm, hinit_der2, hinit_guess, hinit_norms,
-                           hinit_refine, hinit_refine_order, momentum_scale, reject_nonfinite, reject_step)
+                           hinit_refine, hinit_refine_order, momentum_scale, reject_nonfinite, reject_step, stage_orbits)
 from .switches import AT_START, REARM, crossed, locate, loop_switch_values, loop_switches, update
 
 __all__ = ["loop_of", "stage_input", "ROOT_TOL", "MAX_REFINE"]
@@ -348,23 +348,8 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             sw_land = landing and t_next == t_sw  # this attempt ends on the located switch
             t_new = t_next if landing else t + hh
             # --- the stages
-            if EXTENDED and not LANES:
-                # one trajectory of an extended model: the orbit at every stage first, in the
-                # stages' order (the same calls, so the same bits): it does not depend on the
-                # state, and evaluated together it leaves the chain from stage to stage (the
-                # stages depend on each other; measured on a 10 Hz loop: ~190 ns of ~830 a step)
-                for s in range(1, N_STAGES):
-                    ts = t + C[s] * hh
-                    if LAST_NEW:
-                        if s == N_STAGES - 1:
-                            ts = t_new
-                    o_t, o_dtds, o_r, o_xhat, o_v = orbit_at(ts, terms, params, table, work)
-                    orbs[s, 0] = o_t
-                    orbs[s, 1] = o_dtds
-                    orbs[s, 2] = o_r
-                    for i in range(3):
-                        orbs[s, 3 + i] = o_xhat[i]
-                        orbs[s, 6 + i] = o_v[i]
+            if EXTENDED and not LANES:  # one extended trajectory: the stages' orbit first
+                stage_orbits(t, hh, t_new, C, N_STAGES, LAST_NEW, terms, params, table, work, orbs)
             for s in range(1, N_STAGES):
                 stage_input(ytmp, yg, K, s, hh, A_PTR, A_COL, A_VAL, ncomp, nl)
                 ts = t + C[s] * hh
