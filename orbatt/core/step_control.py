@@ -295,7 +295,7 @@ def stage_orbits(t, hh, t_new, C, n_stages, last_new, terms, params, table, work
     so the same bits (the Kepler warm start's memory included). One trajectory's stages form a
     chain, each stage's input the last one's output; the orbit does not depend on the state, and
     evaluated together before the stages it leaves that chain (measured on the 10 Hz loop on
-    wheels, ``bs32``: ~1.0 -> ~0.75 us a tick, ``docs/design.md`` section 4)."""
+    wheels, ``bs32``: ~1.0 -> ~0.75 us a tick; ``docs/design.md`` §4)."""
     for s in range(1, n_stages):
         ts = t + C[s] * hh
         if last_new:
