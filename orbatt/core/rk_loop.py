@@ -50,7 +50,8 @@ from .potentials import MAX_SWITCHES, SWITCH_SLOT
 from .step_control import (CNT_FLAGS, CNT_IOUT, CNT_NFEV, CNT_NREC, CNT_SWITCHES, ST_FACOLD, ST_H, ST_HMIN,
                            ST_SWITCH_K, ST_SWITCH_T, ST_T, PAIRS, TABLEAUS, accept_step, all_finite, begin_attempt,
                            controller, controller9, controller_pow, error_norm, hinit_der2, hinit_guess, hinit_norms,
-                           hinit_refine, hinit_refine_order, momentum_scale, reject_nonfinite, reject_step, stage_orbits)
+                           hinit_refine, hinit_refine_order, momentum_scale, reject_nonfinite, reject_step,
+                           stage_orbits)
 from .switches import AT_START, REARM, crossed, locate, loop_switch_values, loop_switches, update
 
 __all__ = ["loop_of", "stage_input", "ROOT_TOL", "MAX_REFINE"]
@@ -106,9 +107,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
     A step that lands on a flight-software tick (extended models) and locates no switch skips
     the derivative at its end under the old command (``"dop853"``, ``"verner98"``): the tick
     changes the command held in the state, and the loop evaluates the derivative once, after
-    it (``"dopri5"`` and ``"bs32"`` have that derivative already: their last stage; when the
-    laws are PD laws on the wheels only, the loop then rewrites its wheels' rows for the new
-    command instead of evaluating it again: :mod:`orbatt.core.held_commands`).
+    it (``"dopri5"``, ``"bs32"``: their last stage, rewritten: :mod:`orbatt.core.held_commands`).
 
     All five are constants of the closure: numba prunes the branches not taken, so the rigid
     body's loop does not compile the extended right-hand side, and they keep the on-disk cache
@@ -178,8 +177,6 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             Kown = np.empty((N_STAGES + 1, ncomp, nl))
             tmpown = np.empty((3, ncomp, nl))
             K = borrow(Kown)
-            xown = np.empty((LANE_SCRATCH, nl))  # the extended lanes' scratch
-            S = borrow(xown)
             yg = borrow(tmpown[0])
             ytmp = borrow(tmpown[1])
             ynew = borrow(tmpown[2])
@@ -189,8 +186,6 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
             Kown = np.empty((N_STAGES + 1, ncomp))
             tmpown = np.empty((3, ncomp))
             K1 = borrow(Kown)
-            xown = np.empty((1, 1))
-            S = borrow(xown)
             y1 = borrow(tmpown[0])
             ytmp1 = borrow(tmpown[1])
             ynew1 = borrow(tmpown[2])
@@ -202,6 +197,8 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         sv = borrow(sown)
         oown = np.empty((N_STAGES, 9))  # the orbit at the stages (one extended trajectory)
         orbs = borrow(oown)
+        xown = np.empty((LANE_SCRATCH, nl))  # the extended lanes' scratch
+        S = borrow(xown)
         I = sv[0:3]  # noqa: E741 - the lanes' principal moments (3, nl)
         G = sv[3:7]  # scratch of rhs_lanes
         aQ = sv[7]   # the lanes' absolute tolerance of Q
@@ -230,11 +227,8 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         status = DONE
         # --- the flight software's ticks (orbatt.core.gyrostat.tick): a law with a period holds
         # its command in the state; the loop lands on its ticks and evaluates it there
-        ticks = False
-        wheels_only = False  # a tick changes only the wheels' rows of the derivative
-        if EXTENDED:
-            ticks = has_ticks(terms, params)
-            wheels_only = wheel_ticks_only(terms, params)
+        ticks = has_ticks(terms, params) if EXTENDED else False
+        wheels_only = wheel_ticks_only(terms, params) if EXTENDED else False  # a tick changes only h's rows
         # (the commands held from the start are issued by the driver before the first call:
         # orbatt.methods.dop853, tick(..., start=True))
         if (flags & FLAG_F0_VALID) == 0:
@@ -514,8 +508,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         k_sw = -1
                 if EXTENDED:
                     if t == t_tick:  # a tick: the laws evaluate on the state, which holds their commands
-                        # (the next tick first: it depends on the time only, so its Kepler solve
-                        # overlaps the laws' evaluation)
+                        # (the next tick first: it depends on the time only)
                         t_cur = t_grid
                         t_tick, t_grid = next_tick_grid(t, terms, params, t_cur)
                         if LANES:
