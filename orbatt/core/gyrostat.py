@@ -416,9 +416,18 @@ def tick(s, y, inertia, terms, params, table, work, start, t_grid):
     one of them; ``t_grid``: that tick's time, :func:`next_tick_grid`, NaN if unknown)."""
     t, _, r, xhat, v = orbit_at(s, terms, params, table, work)
     q = (y[0], y[1], y[2], y[3])
-    w0 = wheel_row(terms)
     w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
-    omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, w0)
+    omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, wheel_row(terms))
+    tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, start, t_grid)
+
+
+@jit_inline
+def tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, start, t_grid):
+    """:func:`tick` for the orbit ``t, r, xhat, v`` at ``s`` (:func:`orbit_at`) and the body
+    rate ``omega`` of ``y`` (:func:`body_rate`), which its caller shares (:func:`orbatt.core.
+    held_commands.wheel_tick`)."""
+    q = (y[0], y[1], y[2], y[3])
+    w0 = wheel_row(terms)
     nav = -1
     for j in range(1, terms.shape[0]):  # the sensors and the filter first (issue 33)
         if terms[j, KIND] == NAVIGATION:

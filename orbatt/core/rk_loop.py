@@ -41,7 +41,7 @@ import numpy as np
 from ._jit import (BAD_LANE_SHIFT, BUFFER_FULL, DONE, EPS, FLAG_BITS, FLAG_F0_VALID, FLAG_REJECTED, INTERPRETED,
                    borrow, borrow_model, jit, jit_inline, keepalive)
 from .gyrostat import extended_rates, has_ticks, next_tick_grid, rhs_extended, tick
-from .held_commands import LANE_SCRATCH, rhs_extended_lanes, wheel_command_rates, wheel_ticks_only
+from .held_commands import LANE_SCRATCH, rhs_extended_lanes, wheel_tick, wheel_ticks_only
 from .mode_events import advance as advance_modes, next_event, sequence_count
 from .hamiltonian import rhs, rhs_inline, rhs_lanes
 from .model import next_breakpoint
@@ -512,19 +512,19 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         t_cur = t_grid
                         t_tick, t_grid = next_tick_grid(t, terms, params, t_cur)
                         if LANES:
-                            for l in range(nl):
-                                tick(t, yg[:, l], I[:, l], terms, params, table, work, False, t_cur)
                             if LAST_NEW and wheels_only:  # K[0] is the derivative before the tick
                                 for l in range(nl):
-                                    wheel_command_rates(t, yg[:, l], I[:, l], terms, params, table, work, K[0, :, l])
+                                    wheel_tick(t, yg[:, l], I[:, l], terms, params, table, work, t_cur, K[0, :, l])
                             else:
+                                for l in range(nl):
+                                    tick(t, yg[:, l], I[:, l], terms, params, table, work, False, t_cur)
                                 rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0], S)
                                 cnt[CNT_NFEV] += 1
                         else:
-                            tick(t, y1, inertia, terms, params, table, work, False, t_cur)
                             if LAST_NEW and wheels_only:  # (orbatt.core.held_commands)
-                                wheel_command_rates(t, y1, inertia, terms, params, table, work, K1[0])
+                                wheel_tick(t, y1, inertia, terms, params, table, work, t_cur, K1[0])
                             else:
+                                tick(t, y1, inertia, terms, params, table, work, False, t_cur)
                                 rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])
                                 cnt[CNT_NFEV] += 1
                 if SWITCHES and EXTENDED:

@@ -161,11 +161,38 @@ def test_wheel_command_rates_is_the_full_derivative(which, tmp_path):
     assert pd > 0
 
 
+@pytest.mark.parametrize("which", [0, 1])
+def test_wheel_tick_is_the_tick_and_the_wheels_rows(which, tmp_path):
+    """The fused tick of wheel-only laws (:func:`wheel_tick`: one orbit and one body rate for
+    the laws and the wheels' rows) writes the commands :func:`orbatt.core.gyrostat.tick` writes
+    and the derivative :func:`wheel_command_rates` rewrites, bit for bit, on ticks of the
+    grid and with the laws' integral state untouched elsewhere."""
+    sc, k, y0 = _kernel(MODELS[which][1], tmp_path)
+    rng = np.random.default_rng(13)
+    Y, I = _lanes(k, y0, np.asarray(sc.body.inertia_value, float), 6, rng)
+    changed = 0
+    for l in range(Y.shape[1]):
+        inertia = np.ascontiguousarray(I[:, l])
+        for s in (0.0, 3110 * 0.1, 57399 * 0.1):   # ticks of the 0.1 s grid (phase 0)
+            before = np.empty(Y.shape[0])
+            kg.rhs_extended(s, np.array(Y[:, l]), inertia, k.terms, k.params, k.table, np.full(WORK_SIZE, np.nan),
+                            before)
+            y1, d1 = np.array(Y[:, l]), before.copy()
+            w1 = np.full(WORK_SIZE, np.nan)
+            kg.tick(s, y1, inertia, k.terms, k.params, k.table, w1, False, s)
+            hc.wheel_command_rates(s, y1, inertia, k.terms, k.params, k.table, w1, d1)
+            y2, d2 = np.array(Y[:, l]), before.copy()
+            hc.wheel_tick(s, y2, inertia, k.terms, k.params, k.table, np.full(WORK_SIZE, np.nan), s, d2)
+            assert y2.tobytes() == y1.tobytes() and d2.tobytes() == d1.tobytes()
+            changed += int(not np.array_equal(y2, Y[:, l]))   # the tick wrote a new command
+    assert changed == 3 * Y.shape[1]
+
+
 @pytest.mark.parametrize("method", ["bs32", "dopri5"])
 def test_group_of_one_lane_is_the_member(method, tmp_path):
     """End to end, ticks included: groups of one lane (the structure-of-arrays right-hand side,
     the wheels' rows rewritten after each tick) give each member's single run (the stages'
-    orbit evaluated first, the next tick solved a tick ahead) bit for bit; groups of three step
+    orbit evaluated first, the fused tick of :func:`wheel_tick`) bit for bit; groups of three step
     together and agree to the tolerance."""
     import astropy.units as u
 
