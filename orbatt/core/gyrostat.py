@@ -335,7 +335,7 @@ def _grid_after(t, phase, period):
 
 
 @jit_inline
-def _on_grid(s, t, phase, period, terms, params, t_grid):
+def on_grid(s, t, phase, period, terms, params, t_grid):
     """Whether ``s`` (the independent variable; ``t`` its time) is a tick ``phase + k period``
     as :func:`next_tick` gives them (in the eccentric anomaly: the tick's anomaly). ``t_grid``:
     the time of the tick the step loop landed on (:func:`next_tick_grid`: ``s`` is its anomaly
@@ -432,7 +432,7 @@ def tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, start, t_gri
     for j in range(1, terms.shape[0]):  # the sensors and the filter first (issue 33)
         if terms[j, KIND] == NAVIGATION:
             nav = terms[j, P0]
-            if start or _on_grid(s, t, params[nav + _CTL_PHASE], params[nav + _CTL_PERIOD], terms, params, t_grid):
+            if start or on_grid(s, t, params[nav + _CTL_PHASE], params[nav + _CTL_PERIOD], terms, params, t_grid):
                 sun = (0.0, 0.0, 0.0)
                 if terms[j, R1] > terms[j, R0]:
                     s4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
@@ -460,29 +460,10 @@ def tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, start, t_gri
         if not period > 0.0:
             continue
         z0 = int(params[p0 + _CTL_Z0])
-        if not start and not _on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params, t_grid):
+        if not start and not on_grid(s, t, params[p0 + _CTL_PHASE], period, terms, params, t_grid):
             continue
         if kind == PD_CONTROL:
-            aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
-            tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y)
-            if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
-                ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + wheel_count(params, w0)])
-            elif params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_MAGNETORQUERS:  # the dipole, held
-                b, mmax = magnetorquer_field(j, t, q, terms, params, table, work)
-                m = ctl.pd_dipole(tau, b, mmax, params, p0)
-                y[z0] = m[0]
-                y[z0 + 1] = m[1]
-                y[z0 + 2] = m[2]
-            else:
-                y[z0] = tau[0]
-                y[z0 + 1] = tau[1]
-                y[z0 + 2] = tau[2]
-            ki = params[p0 + _PD_KI]
-            if ki > 0.0:  # the discrete integral: s_k+1 = s_k + period e_k (anti-windup gated)
-                zi = int(params[p0 + _PD_ZI])
-                tmax = params[p0 + _PD_TMAX]
-                for k in range(3):
-                    y[zi + k] += period * ctl.windup_gate(raw[k], e[k], ki, tmax)
+            pd_tick(j, t, q, omega, r, xhat, v, y, w0, terms, params, table, work)
         elif kind == MOMENTUM_DUMP:  # the dumping dipole of the wheels' momentum and the field at the tick
             b4 = piece_eval(table[terms[j, R0]:terms[j, R1]], t, 3, terms[j, FLAGS], work)
             m = ctl.dump_dipole(ctl.wheels_momentum(y, params, w0), rotate_inv(q, (b4[0], b4[1], b4[2])), params, p0)
@@ -495,6 +476,35 @@ def tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, start, t_gri
             y[z0] = m[0]
             y[z0 + 1] = m[1]
             y[z0 + 2] = m[2]
+
+
+@jit_inline
+def pd_tick(j, t, q, omega, r, xhat, v, y, w0, terms, params, table, work):
+    """PD row ``j`` at its tick: its command (the torque, the wheels' motor torques or the
+    dipole) into ``y[z0:]`` and its discrete integral ``s_k+1 = s_k + period e_k``, for the
+    attitude ``q`` and rate ``omega`` the flight software knows and the orbit ``t, r, xhat, v``."""
+    p0 = terms[j, P0]
+    z0 = int(params[p0 + _CTL_Z0])
+    aux, aux_rate = pd_row_target(j, t, terms, params, table, work)
+    tau, raw, e = ctl.pd_torque(q, omega, params, p0, r, xhat, v, aux, aux_rate, y)
+    if params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS:
+        ctl.wheel_commands(tau, params, p0, w0, y[z0:z0 + wheel_count(params, w0)])
+    elif params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_MAGNETORQUERS:  # the dipole, held
+        b, mmax = magnetorquer_field(j, t, q, terms, params, table, work)
+        m = ctl.pd_dipole(tau, b, mmax, params, p0)
+        y[z0] = m[0]
+        y[z0 + 1] = m[1]
+        y[z0 + 2] = m[2]
+    else:
+        y[z0] = tau[0]
+        y[z0 + 1] = tau[1]
+        y[z0 + 2] = tau[2]
+    ki = params[p0 + _PD_KI]
+    if ki > 0.0:  # the discrete integral: s_k+1 = s_k + period e_k (anti-windup gated)
+        zi = int(params[p0 + _PD_ZI])
+        tmax = params[p0 + _PD_TMAX]
+        for k in range(3):
+            y[zi + k] += params[p0 + _CTL_PERIOD] * ctl.windup_gate(raw[k], e[k], ki, tmax)
 
 
 @jit_inline
@@ -558,7 +568,7 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
         return
     if not params[p0 + _CTL_PERIOD] > 0.0:  # a continuous sequence: orbatt.core.mode_events
         return
-    if not _on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params, t_grid):
+    if not on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params, t_grid):
         return
     m = int(y[z])
     if m >= int(params[p0 + _MD_COUNT]) - 1:

@@ -35,20 +35,21 @@ import math
 from ._jit import jit, jit_inline
 from . import control as ctl
 from .environment import piece_eval, piece_eval_rate
-from .gyrostat import (body_rate, cofactor_solve, extended_rates, is_flight_software, row_active, tick_on, wheel_count,
-                       wheel_row)
-from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, MOMENTUM_DUMP, P0, PD_CONTROL, R0, R1, orbit_at, terms_lanes)
+from .gyrostat import (body_rate, cofactor_solve, extended_rates, is_flight_software, on_grid, pd_tick, row_active,
+                       tick_on, wheel_count, wheel_row)
+from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, MOMENTUM_DUMP, NAVIGATION, P0, PD_CONTROL, R0, R1, orbit_at,
+                    terms_lanes)
 from .qalg import cross, qconj, qmul, qmul_pure, rotate_inv
 from .torques import gradient_of_torque
 
-__all__ = ["LANE_SCRATCH", "held_lanes", "rhs_extended_lanes", "wheel_ticks_only", "wheel_command_rates", "wheel_tick"]
+__all__ = ["LANE_SCRATCH", "held_lanes", "rhs_extended_lanes", "wheel_ticks_only", "wheel_command_rates", "wheel_tick", "pd_ticks"]
 
 #: rows of the scratch ``S (LANE_SCRATCH, L)`` that :func:`rhs_extended_lanes` takes
 LANE_SCRATCH = 22
 
 _W_AXIS, _W_IW, _W_SMAX = ctl.WHEEL.axis, ctl.WHEEL.iw, ctl.WHEEL.speed_max
 _W_COULOMB, _W_VISCOUS, _W_WIDTH = ctl.WHEEL.coulomb, ctl.WHEEL.viscous, ctl.WHEEL.width
-_CTL_PERIOD, _CTL_Z0 = ctl.CTL_PERIOD, ctl.CTL_Z0
+_CTL_PERIOD, _CTL_PHASE, _CTL_Z0 = ctl.CTL_PERIOD, ctl.CTL_PHASE, ctl.CTL_Z0
 _PD_ACTUATOR = ctl.PD_ACTUATOR
 
 
@@ -230,18 +231,24 @@ def rhs_extended_lanes(s, Y, nl, I, terms, params, table, work, dY, S):
 def wheel_ticks_only(terms, params):
     """Whether the model's laws are all PD laws on the reaction wheels with a period (no other
     law, no mode sequence): a tick then changes only the wheels' rows of the derivative
-    (:func:`wheel_command_rates`)."""
+    (:func:`wheel_command_rates`). 0: no; 1: yes, with sensors; 2: yes, without sensors (the
+    tick of :func:`pd_ticks`)."""
     found = False
+    sensors = False
     for j in range(1, terms.shape[0]):
         kind = terms[j, KIND]
         p0 = terms[j, P0]
         if kind == MODES or kind == BDOT_CONTROL or kind == MOMENTUM_DUMP:
-            return False
+            return 0
+        if kind == NAVIGATION:
+            sensors = True
         if kind == PD_CONTROL:
             if not (params[p0 + _CTL_PERIOD] > 0.0 and params[p0 + _PD_ACTUATOR] == ctl.ACTUATOR_WHEELS):
-                return False
+                return 0
             found = True
-    return found
+    if not found:
+        return 0
+    return 1 if sensors else 2
 
 
 @jit
@@ -259,17 +266,35 @@ def wheel_command_rates(s, y, inertia, terms, params, table, work, dy):
 
 
 @jit
-def wheel_tick(s, y, inertia, terms, params, table, work, t_grid, dy):
+def wheel_tick(s, y, inertia, terms, params, table, work, t_grid, dy, lean):
     """:func:`orbatt.core.gyrostat.tick` at ``s`` and then :func:`wheel_command_rates`, for a
     model of :func:`wheel_ticks_only`, sharing their orbit and body rate (the laws leave the
     attitude and the wheels' momenta as they are): the same numbers as the two calls, ~80 ns
-    less a tick on the 10 Hz loop on wheels (``docs/design.md`` §4)."""
+    less a tick on the 10 Hz loop on wheels (``docs/design.md`` §4). ``lean``: the model has no
+    sensors (:func:`wheel_ticks_only` 2), so its laws run as :func:`pd_ticks`,
+    without walking the rows for sensors and modes."""
     t, dtds, r, xhat, v = orbit_at(s, terms, params, table, work)
     q = (y[0], y[1], y[2], y[3])
     w = qmul(qconj(q), (y[4], y[5], y[6], y[7]))
     omega, _ = body_rate((0.5 * w[1], 0.5 * w[2], 0.5 * w[3]), y, inertia, params, wheel_row(terms))
-    tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, False, t_grid)
+    if lean:  # (wheel_ticks_only 2: PD laws alone, no sensors)
+        pd_ticks(s, t, r, xhat, v, omega, y, terms, params, table, work, t_grid)
+    else:
+        tick_on(s, t, r, xhat, v, omega, y, terms, params, table, work, False, t_grid)
     wheel_rows(dtds, omega, y, terms, params, dy)
+
+
+@jit_inline
+def pd_ticks(s, t, r, xhat, v, omega, y, terms, params, table, work, t_grid):
+    """:func:`orbatt.core.gyrostat.tick_on` for a model whose flight software is PD laws alone, each with a period
+    (no sensors, no mode sequence, no other law): the rows whose tick ``s`` is, on the truth."""
+    q = (y[0], y[1], y[2], y[3])
+    w0 = wheel_row(terms)
+    for j in range(1, terms.shape[0]):
+        if terms[j, KIND] == PD_CONTROL:
+            p0 = terms[j, P0]
+            if on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params, t_grid):
+                pd_tick(j, t, q, omega, r, xhat, v, y, w0, terms, params, table, work)
 
 
 @jit_inline

@@ -228,7 +228,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         # --- the flight software's ticks (orbatt.core.gyrostat.tick): a law with a period holds
         # its command in the state; the loop lands on its ticks and evaluates it there
         ticks = has_ticks(terms, params) if EXTENDED else False
-        wheels_only = wheel_ticks_only(terms, params) if EXTENDED else False  # a tick changes only h's rows
+        wheels_only = wheel_ticks_only(terms, params) if EXTENDED else 0  # > 0: a tick changes only h's rows
         # (the commands held from the start are issued by the driver before the first call:
         # orbatt.methods.dop853, tick(..., start=True))
         if (flags & FLAG_F0_VALID) == 0:
@@ -296,7 +296,7 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
         bad_lane = -1
         t_brk = next_breakpoint(t, terms, params, table)
         t_tick = np.inf
-        t_grid = math.nan  # the time of the tick t_tick (its anomaly is t_tick: gyrostat._on_grid)
+        t_grid = math.nan  # the time of the tick t_tick (its anomaly is t_tick: gyrostat.on_grid)
         if EXTENDED:
             if ticks:
                 t_tick, t_grid = next_tick_grid(t, terms, params, math.nan)
@@ -507,22 +507,22 @@ def loop_of(width, extended, tableau="dop853", coupled=False, lanes=False):
                         t_sw = np.inf
                         k_sw = -1
                 if EXTENDED:
-                    if t == t_tick:  # a tick: the laws evaluate on the state, which holds their commands
-                        # (the next tick first: it depends on the time only)
+                    if t == t_tick:  # a tick: the laws evaluate on the state (the next tick first: time only)
                         t_cur = t_grid
                         t_tick, t_grid = next_tick_grid(t, terms, params, t_cur)
                         if LANES:
-                            if LAST_NEW and wheels_only:  # K[0] is the derivative before the tick
-                                for l in range(nl):
-                                    wheel_tick(t, yg[:, l], I[:, l], terms, params, table, work, t_cur, K[0, :, l])
+                            if LAST_NEW and wheels_only > 0:  # K[0] is the derivative before the tick
+                                for l in range(nl):  # (2: no sensors)
+                                    wheel_tick(t, yg[:, l], I[:, l], terms, params, table, work, t_cur, K[0, :, l],
+                                               wheels_only == 2)
                             else:
                                 for l in range(nl):
                                     tick(t, yg[:, l], I[:, l], terms, params, table, work, False, t_cur)
                                 rhs_extended_lanes(t, yg, nl, I, terms, params, table, work, K[0], S)
                                 cnt[CNT_NFEV] += 1
                         else:
-                            if LAST_NEW and wheels_only:  # (orbatt.core.held_commands)
-                                wheel_tick(t, y1, inertia, terms, params, table, work, t_cur, K1[0])
+                            if LAST_NEW and wheels_only > 0:  # (orbatt.core.held_commands)
+                                wheel_tick(t, y1, inertia, terms, params, table, work, t_cur, K1[0], wheels_only == 2)
                             else:
                                 tick(t, y1, inertia, terms, params, table, work, False, t_cur)
                                 rhs_extended(t, y1, inertia, terms, params, table, work, K1[0])

@@ -181,11 +181,13 @@ def test_wheel_tick_is_the_tick_and_the_wheels_rows(which, tmp_path):
             w1 = np.full(WORK_SIZE, np.nan)
             kg.tick(s, y1, inertia, k.terms, k.params, k.table, w1, False, s)
             hc.wheel_command_rates(s, y1, inertia, k.terms, k.params, k.table, w1, d1)
-            y2, d2 = np.array(Y[:, l]), before.copy()
-            hc.wheel_tick(s, y2, inertia, k.terms, k.params, k.table, np.full(WORK_SIZE, np.nan), s, d2)
-            assert y2.tobytes() == y1.tobytes() and d2.tobytes() == d1.tobytes()
-            changed += int(not np.array_equal(y2, Y[:, l]))   # the tick wrote a new command
-    assert changed == 3 * Y.shape[1]
+            for lean in (False, True):   # tick_on, or the PD laws alone (no sensors here)
+                y2, d2 = np.array(Y[:, l]), before.copy()
+                hc.wheel_tick(s, y2, inertia, k.terms, k.params, k.table, np.full(WORK_SIZE, np.nan), s, d2, lean)
+                assert y2.tobytes() == y1.tobytes() and d2.tobytes() == d1.tobytes()
+                changed += int(not np.array_equal(y2, Y[:, l]))   # the tick wrote a new command
+    assert changed == 6 * Y.shape[1]
+    assert hc.wheel_ticks_only(k.terms, k.params) == 2   # the loop takes the lean form
 
 
 @pytest.mark.parametrize("method", ["bs32", "dopri5"])
