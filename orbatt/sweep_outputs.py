@@ -34,7 +34,7 @@ import numpy as np
 
 from . import quaternion as qt
 from . import units as U
-from .dataset.control import mode_column
+from .dataset.control import mode_column, mode_entry_times
 from .dataset.navigation import estimate_at, knowledge_error, navigation_column
 from .laws import LAWS, MODE_SEQUENCE, law_of
 from .methods.problem import kernel_spec
@@ -338,16 +338,9 @@ def _final_wheel_momentum(c):
 
 def _mode_entry_time(c):
     """The time each mode began, from the sequence's state along the outputs (as the single
-    run's Dataset: :func:`orbatt.dataset.control.control_variables`)."""
-    control = c.potential.control
+    run's Dataset: :func:`orbatt.dataset.control.mode_entry_times`)."""
     nw = len(c.body.wheels)
-    col = nw + mode_column(c.kernel, nw)
-    mode, began = c.h[:, col], c.h[:, col + 1]
-    entry = np.full(len(control.names), np.nan)
-    for k in range(entry.size):
-        at = began[mode == k]
-        if at.size:
-            entry[k] = np.min(at)
+    entry = mode_entry_times(c.h, nw + mode_column(c.kernel, nw), len(c.potential.control.names))
     return {"mode_entry_time": entry}
 
 

@@ -55,6 +55,7 @@ import numpy as np
 
 from ._jit import jit_inline
 from .qalg import cross, mat_t_vec, mat_vec, qconj, qmul, rotate_inv
+from . import mode_state
 from .slots import Slots
 
 #: PD targets
@@ -76,8 +77,8 @@ WHEEL = Slots(("axis", 3), ("iw", 1), ("u_max", 1), ("speed_max", 1), ("coulomb"
 PD = Slots(*FLIGHT_SOFTWARE, ("target", 1), ("kp", 1), ("kd", 1), ("max_torque", 1), ("actuator", 1), ("c", 4),
            ("max_rate", 1), ("ki", 1), ("zi", 1), *LIMIT_FRAME, tail="pinv")
 BDOT = Slots(*FLIGHT_SOFTWARE, ("gain", 1), ("max_dipole", 1), *LIMIT_FRAME)
-#: a mode sequence (:data:`~orbatt.core.model.MODES`, issue 32 item 4): its state ``y[z0:z0 + 4]``
-#: is ``(mode, entry time, time its conditions began to hold, whether they hold)``; ``count`` modes, then per mode the
+#: a mode sequence (:data:`~orbatt.core.model.MODES`, issue 32 item 4): its state ``y[z0:z0 + 4 + count]``
+#: is laid out in :mod:`orbatt.core.mode_state`; ``count`` modes, then per mode the
 #: tail :data:`MODE_FIELDS`: leave after ``until_time`` in the mode, or once ``|omega| <
 #: until_rate`` or the attitude error ``< until_settled`` (rad) has held for ``hold`` (``inf``:
 #: no such condition; any condition met leaves; the last mode stays)
@@ -132,10 +133,10 @@ def wheel_params(axes, inertia, max_torque, max_speed, coulomb=0.0, viscous=0.0,
 def modes_params(period, z0, conditions, phase=0.0):
     """The parameters of a :data:`~orbatt.core.model.MODES` row: the flight software's
     ``period`` (0: continuous laws, the transitions located on the solution:
-    :mod:`orbatt.core.mode_events`), its state at ``y[z0:z0 + 4]``, and ``conditions (n,
-    MODE_FIELDS)``."""
+    :mod:`orbatt.core.mode_events`), its state at ``y[z0:]`` (:mod:`orbatt.core.mode_state`),
+    and ``conditions (n, MODE_FIELDS)``."""
     c = np.asarray(conditions, dtype=np.float64).reshape(-1, MODE_FIELDS)
-    return MODES.pack(tail=c, count=float(c.shape[0]), nz=4.0, mode=-1.0,
+    return MODES.pack(tail=c, count=float(c.shape[0]), nz=float(mode_state.state_size(c.shape[0])), mode=-1.0,
                       **flight_software(period, phase, z0))
 
 

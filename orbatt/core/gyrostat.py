@@ -30,6 +30,7 @@ from .model import (BDOT_CONTROL, FLAGS, KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, 
 from .model import MAGNETORQUERS, MOMENTUM_DUMP, NAVIGATION, VECTOR_SENSOR
 from . import estimator as est
 from .kepler import anomaly_of_time
+from .mode_state import ENTRY, HOLD_BEGAN, HOLDS, MODE, enter_mode
 from .qalg import cross, qconj, qmul, qmul_pure, rotate_inv, vadd
 from .torques import gradient_of_torque
 
@@ -56,7 +57,7 @@ def current_mode(terms, params, y):
     """The mode the model's sequence is in (its state ``y[z0]``; -1 without a sequence)."""
     for j in range(1, terms.shape[0]):
         if terms[j, KIND] == MODES:
-            return y[int(params[terms[j, P0] + _CTL_Z0])]
+            return y[int(params[terms[j, P0] + _CTL_Z0]) + MODE]
     return -1.0
 
 
@@ -65,7 +66,6 @@ def row_active(params, p0, mode):
     """Whether a law's row acts in ``mode`` (:func:`current_mode`): a row of no mode always."""
     rm = params[p0 + _CTL_MODE]
     return rm < 0.0 or rm == mode
-
 
 
 @jit_inline
@@ -335,13 +335,20 @@ def _grid_after(t, phase, period):
 
 
 @jit_inline
+def grid_time(t, phase, period):
+    """The tick ``phase + k period`` nearest to the time ``t``: the flight software's clock at a
+    tick whose state's time ``t`` is off by rounding (in the eccentric anomaly, the time of the
+    tick's anomaly is the tick's time to an ulp or so)."""
+    return phase + math.floor((t - phase) / period + 0.5) * period
+
+
+@jit_inline
 def on_grid(s, t, phase, period, terms, params, t_grid):
     """Whether ``s`` (the independent variable; ``t`` its time) is a tick ``phase + k period``
     as :func:`next_tick` gives them (in the eccentric anomaly: the tick's anomaly). ``t_grid``:
     the time of the tick the step loop landed on (:func:`next_tick_grid`: ``s`` is its anomaly
     exactly), which spares Kepler's equation for a row whose tick it is; NaN: unknown."""
-    k = math.floor((t - phase) / period + 0.5)
-    tk = phase + k * period
+    tk = grid_time(t, phase, period)
     if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
         if tk == t_grid:
             return True
@@ -555,26 +562,27 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
     start of a run (its state unset), mode 0 from ``t``; on one of its ticks, leave the current
     mode for the next when its ``until_time`` has passed since it began, or when its other
     conditions (``|omega| < until_rate``; the attitude error of the mode's PD law ``<
-    until_settled``; all those given) have held for ``hold``. The state ``y[z0:z0 + 3]`` is
-    ``(mode, entry time, time the conditions began to hold, whether they hold)``; the last
-    mode stays. (No NaN in the state: the step loop's error norm reads every component.)"""
+    until_settled``; all those given) have held for ``hold``. The state ``y[z0:]`` is
+    ``(mode, entry time, time the conditions began to hold, whether they hold)``, then each
+    mode's entry time (:mod:`orbatt.core.mode_state`); the last mode stays. Its clock is the
+    tick's own time (:func:`grid_time`), not the state's, which in the eccentric anomaly may lie
+    an ulp below it (``until_time = 3 s`` then left at 4 s). (No NaN in the state: the step
+    loop's error norm reads every component.)"""
     p0 = terms[jm, P0]
     z = int(params[p0 + _CTL_Z0])
-    if start:
-        y[z] = 0.0
-        y[z + 1] = t
-        y[z + 2] = t
-        y[z + 3] = 0.0
+    phase, period = params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD]
+    ticks = period > 0.0 and on_grid(s, t, phase, period, terms, params, t_grid)
+    clock = grid_time(t, phase, period) if ticks else t
+    if start:  # (a run may start between two ticks: then at its own time)
+        enter_mode(y, z, 0, clock)
         return
-    if not params[p0 + _CTL_PERIOD] > 0.0:  # a continuous sequence: orbatt.core.mode_events
+    if not ticks:  # not one of its ticks (or a sequence without a period: orbatt.core.mode_events)
         return
-    if not on_grid(s, t, params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD], terms, params, t_grid):
-        return
-    m = int(y[z])
+    m = int(y[z + MODE])
     if m >= int(params[p0 + _MD_COUNT]) - 1:
         return
     c = p0 + _MD_COND + _MD_FIELDS * m
-    leave = t - y[z + 1] >= params[c + _MD_TIME]
+    leave = clock - y[z + ENTRY] >= params[c + _MD_TIME]
     rate, settled = params[c + _MD_RATE], params[c + _MD_SETTLED]
     if rate < np.inf or settled < np.inf:
         holds = True
@@ -583,15 +591,12 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
         if settled < np.inf:
             holds = holds and mode_error_angle(t, q, m, terms, params, table, work, r, xhat, v) < settled
         if holds:
-            if y[z + 3] == 0.0:
-                y[z + 2] = t
-                y[z + 3] = 1.0
-            if t - y[z + 2] >= params[c + _MD_HOLD]:
+            if y[z + HOLDS] == 0.0:
+                y[z + HOLD_BEGAN] = clock
+                y[z + HOLDS] = 1.0
+            if clock - y[z + HOLD_BEGAN] >= params[c + _MD_HOLD]:
                 leave = True
         else:
-            y[z + 3] = 0.0
+            y[z + HOLDS] = 0.0
     if leave:
-        y[z] = float(m + 1)
-        y[z + 1] = t
-        y[z + 2] = t
-        y[z + 3] = 0.0
+        enter_mode(y, z, m + 1, clock)

@@ -18,11 +18,14 @@ with the tools it has for the torques' kinks:
   crossing it landed on (its direction: the sign of the function before it), or the sign of
   ``g`` where ``|g|`` exceeds the anti-chatter band (a crossing that the band hid); a mode whose
   time has come is left (and the next one's conditions are taken at once, so that a mode
-  with ``hold = 0`` whose conditions already hold is passed through at the same instant).
+  with ``hold = 0`` whose conditions already hold is passed through at the same instant). A
+  mode left at the knot of its ``entry + until_time`` or ``began + hold`` hands that time to
+  the next as its entry, exactly (the state's time there may lie an ulp off it).
 
-The state is the periodic sequence's ``y[z0:z0 + 4] = (mode, entry time, time the conditions
-began to hold, whether they hold)``; :func:`orbatt.core.gyrostat.tick` begins it (mode 0) at the
-driver's start tick, then :func:`advance` (``start``) takes the first mode's conditions.
+The state is the periodic sequence's (:mod:`orbatt.core.mode_state`): ``(mode, entry time, time
+the conditions began to hold, whether they hold)``, then each mode's entry time;
+:func:`orbatt.core.gyrostat.tick` begins it (mode 0) at the driver's start tick, then
+:func:`advance` (``start``) takes the first mode's conditions.
 """
 from __future__ import annotations
 
@@ -34,6 +37,7 @@ from ._jit import jit, jit_inline
 from . import control as ctl
 from .gyrostat import body_rate, mode_error_angle, wheel_row
 from .kepler import anomaly_of_time
+from .mode_state import ENTRY, HOLD_BEGAN, HOLDS, MODE, enter_mode
 from .model import KIND, MODES, ORBIT_KEPLER_ANOMALY, P0, P1, orbit_at
 from .qalg import qconj, qmul
 
@@ -103,7 +107,7 @@ def mode_values(s, y, inertia, terms, params, table, work, out):
     for j in range(1, terms.shape[0]):
         if is_continuous_sequence(terms, params, j):
             z = int(params[terms[j, P0] + _CTL_Z0])
-            out[n] = condition_value(t, q, omega, j, int(y[z]), terms, params, table, work, r, xhat, v)
+            out[n] = condition_value(t, q, omega, j, int(y[z + MODE]), terms, params, table, work, r, xhat, v)
             n += 1
     return n
 
@@ -117,6 +121,14 @@ def _reached(s, t, te, terms, params):
     if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
         return anomaly_of_time(te, params[terms[0, P0]:terms[0, P1]]) <= s
     return False
+
+
+@jit_inline
+def _landed_on(s, te, terms, params):
+    """Whether ``s`` is the knot :func:`next_event` gives the time ``te``."""
+    if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
+        return anomaly_of_time(te, params[terms[0, P0]:terms[0, P1]]) == s
+    return te == s
 
 
 @jit
@@ -144,8 +156,9 @@ def advance(s, y, inertia, terms, params, table, work, g_now, landed, now_holds,
         z = int(params[p0 + _CTL_Z0])
         count = int(params[p0 + _MD_COUNT])
         first = True
+        now = t  # the sequence's clock: the time of the knot a mode was left at, else the state's
         for _ in range(count):
-            m = int(y[z])
+            m = int(y[z + MODE])
             if m >= count - 1:
                 break
             c = p0 + _MD_COND + _MD_FIELDS * m
@@ -154,7 +167,7 @@ def advance(s, y, inertia, terms, params, table, work, g_now, landed, now_holds,
             else:  # a mode just begun (or the start): its own conditions
                 g = condition_value(t, q, omega, j, m, terms, params, table, work, r, xhat, v)
             if g == g:
-                holds = y[z + 3] == 1.0
+                holds = y[z + HOLDS] == 1.0
                 if first and i == landed:  # the crossing the loop landed on: its direction
                     holds = now_holds
                 elif start or not first:  # a mode just begun: its conditions as they are
@@ -163,22 +176,25 @@ def advance(s, y, inertia, terms, params, table, work, g_now, landed, now_holds,
                     holds = True
                 elif g > band:
                     holds = False
-                if holds and y[z + 3] == 0.0:
-                    y[z + 2] = t
-                    y[z + 3] = 1.0
+                if holds and y[z + HOLDS] == 0.0:
+                    y[z + HOLD_BEGAN] = now
+                    y[z + HOLDS] = 1.0
                     flag_changed = True
-                elif not holds and y[z + 3] == 1.0:
-                    y[z + 3] = 0.0
+                elif not holds and y[z + HOLDS] == 1.0:
+                    y[z + HOLDS] = 0.0
                     flag_changed = True
-            leave = params[c + _MD_TIME] < np.inf and _reached(s, t, y[z + 1] + params[c + _MD_TIME], terms, params)
-            if y[z + 3] == 1.0 and _reached(s, t, y[z + 2] + params[c + _MD_HOLD], terms, params):
-                leave = True
-            if not leave:
+            # the time the mode's end came: until_time after its entry, or hold after its
+            # conditions began to hold (the earlier)
+            te = np.inf
+            if params[c + _MD_TIME] < np.inf and _reached(s, t, y[z + ENTRY] + params[c + _MD_TIME], terms, params):
+                te = y[z + ENTRY] + params[c + _MD_TIME]
+            if y[z + HOLDS] == 1.0 and _reached(s, t, y[z + HOLD_BEGAN] + params[c + _MD_HOLD], terms, params):
+                te = min(te, y[z + HOLD_BEGAN] + params[c + _MD_HOLD])
+            if not te < np.inf:
                 break
-            y[z] = float(m + 1)
-            y[z + 1] = t
-            y[z + 2] = t
-            y[z + 3] = 0.0
+            if _landed_on(s, te, terms, params):  # the knot of that time: its time, not the state's
+                now = te                          # (in the eccentric anomaly an ulp off it)
+            enter_mode(y, z, m + 1, now)
             mode_changed = True
             first = False
     return mode_changed, flag_changed
@@ -195,7 +211,7 @@ def next_event(s, y, terms, params):
             continue
         p0 = terms[j, P0]
         z = int(params[p0 + _CTL_Z0])
-        m = int(y[z])
+        m = int(y[z + MODE])
         if m >= int(params[p0 + _MD_COUNT]) - 1:
             continue
         c = p0 + _MD_COND + _MD_FIELDS * m
@@ -203,11 +219,11 @@ def next_event(s, y, terms, params):
             if k == 0:
                 if not params[c + _MD_TIME] < np.inf:
                     continue
-                te = y[z + 1] + params[c + _MD_TIME]
+                te = y[z + ENTRY] + params[c + _MD_TIME]
             else:
-                if y[z + 3] != 1.0:
+                if y[z + HOLDS] != 1.0:
                     continue
-                te = y[z + 2] + params[c + _MD_HOLD]
+                te = y[z + HOLD_BEGAN] + params[c + _MD_HOLD]
             se = te
             if terms[0, KIND] == ORBIT_KEPLER_ANOMALY:
                 se = anomaly_of_time(te, params[terms[0, P0]:terms[0, P1]])

@@ -17,6 +17,7 @@ from ..methods.problem import kernel_spec
 from ..model_assembly import command_size
 from ..core import control as kc
 from ..core import model as km
+from ..core import mode_state
 from ..laws import law_of
 from ..units import from_kernel
 from .content import Var
@@ -126,13 +127,7 @@ def control_variables(trajectory, body, inertia, t, tdims, units):
                                 "mode of the flight software's sequence", flag_values=np.arange(len(names), dtype=np.int8),
                                 flag_meanings=" ".join(names),
                                 comment="the mode at the output time (a transition at a tick acts from that tick)")
-            entry = np.full(tuple(mode.shape[:-1]) + (len(names),), np.nan)
-            began = zs[..., col + 1].reshape(q.shape[:-1])
-            for k in range(len(names)):
-                at = np.where(mode == k, began, np.nan)
-                with np.errstate(all="ignore"):
-                    entry[..., k] = np.nanmin(np.where(np.isnan(at), np.inf, at), axis=-1)
-            entry[np.isinf(entry)] = np.nan
+            entry = mode_entry_times(zs if ens else zs[0], col, len(names))
             data["mode_entry_time"] = _var(tdims[:-1] + ("mode_index",), entry, units["time"],
                                            "time each mode of the sequence began (NaN: not entered by the last output)",
                                            comment="mode_index k is flag value k of the variable mode: "
@@ -150,6 +145,33 @@ def mode_column(model, nwheels):
         if int(terms[j, km.KIND]) == km.MODES:
             return int(params[terms[j, km.P0] + kc.CTL_Z0]) - 8 - nwheels
     return None
+
+
+def mode_entry_times(command, column, count):
+    """The time each mode of a sequence began, from its state along the outputs.
+
+    Parameters
+    ----------
+    command : ndarray (..., n_outputs, n_commands)
+        The flight software's states at the outputs (a trajectory's ``command``), kernel units.
+    column : int
+        Where the sequence's state begins in them (:func:`mode_column`; its layout:
+        :mod:`orbatt.core.mode_state`).
+    count : int
+        The sequence's number of modes.
+
+    Returns
+    -------
+    ndarray (..., count)
+        The entry times (s, the kernels' time), exact also for a mode entered and left between
+        two outputs; NaN for a mode not entered by the last output.
+    """
+    z = np.asarray(command, dtype=np.float64)
+    mode = z[..., column + mode_state.MODE]
+    began = z[..., column + mode_state.ENTRIES:column + mode_state.ENTRIES + count]
+    entered = mode[..., None] >= np.arange(count)  # (an unset state, NaN: none)
+    at = np.where(entered, began, np.inf).min(axis=-2, initial=np.inf)
+    return np.where(np.isinf(at), np.nan, at)
 
 
 def wheel_coordinates(body, units):

@@ -194,7 +194,8 @@ def mode_intervals(ds):
     """The run's modes as :class:`ModeInterval` s, in order (empty without a ``mode`` variable;
     an ensemble: its first member's). Each begins when the mode was entered - its
     ``mode_entry_time`` (a tick between two outputs), else the first output in it - and ends
-    where the next begins (the last at the last output); names from ``mode``'s CF
+    where the next begins (the last at the last output); a mode entered and left between two
+    outputs is one too (from its ``mode_entry_time`` to the next's); names from ``mode``'s CF
     ``flag_values`` / ``flag_meanings``."""
     if "mode" not in ds:
         return []
@@ -209,20 +210,29 @@ def mode_intervals(ds):
     names = dict(zip(np.asarray(ds["mode"].attrs.get("flag_values", [])).ravel().tolist(),
                      str(ds["mode"].attrs.get("flag_meanings", "")).split()))
     starts = [i for i in range(mode.size) if mode[i] >= 0 and (i == 0 or mode[i] != mode[i - 1])]
-    out = []
-    for n, i in enumerate(starts):
-        m = int(mode[i])
-        begin = float(t[i])
+
+    def entered(m, i):  # the entry time of mode m, where it lies between output i - 1 and i
         e = float(entry[m]) if entry is not None and m < entry.size else np.nan
-        if i > 0 and t[i - 1] < e <= t[i]:
-            begin = e
-        out.append([begin, None, m, names.get(m, f"mode {m}")])
-    for n in range(len(out)):
-        j = starts[n + 1] if n + 1 < len(out) else None
-        out[n][1] = out[n + 1][0] if j is not None else float(t[-1])
-        if j is not None and np.any(mode[starts[n]:j] < 0):  # (no mode: -1) the stretch ends at its last output
-            out[n][1] = float(t[starts[n] + int(np.argmax(mode[starts[n]:j] < 0)) - 1])
-    return [ModeInterval(*x) for x in out]
+        return e if i > 0 and t[i - 1] < e <= t[i] else None
+
+    out = []  # [begin, end, mode, name, its first output (None: entered and left between two outputs)]
+    for i in starts:
+        m = int(mode[i])
+        for p in range(out[-1][2] + 1 if out else m, m):  # modes passed between the outputs i - 1 and i
+            e = entered(p, i)
+            if e is not None:
+                out.append([e, None, p, names.get(p, f"mode {p}"), None])
+        e = entered(m, i)
+        out.append([float(t[i]) if e is None else e, None, m, names.get(m, f"mode {m}"), i])
+    firsts = [x[4] for x in out if x[4] is not None] + [None]
+    for n, x in enumerate(out):
+        x[1] = out[n + 1][0] if n + 1 < len(out) else float(t[-1])
+        if x[4] is None:
+            continue
+        j = firsts[firsts.index(x[4]) + 1]
+        if j is not None and np.any(mode[x[4]:j] < 0):  # (no mode: -1) the stretch ends at its last output
+            x[1] = float(t[x[4] + int(np.argmax(mode[x[4]:j] < 0)) - 1])
+    return [ModeInterval(*x[:4]) for x in out]
 
 
 def wheel_limits(ds):

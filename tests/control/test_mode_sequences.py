@@ -12,10 +12,13 @@ import pytest
 from astropy import units as u
 
 import orbatt
+from orbatt.dataset.control import mode_column, mode_entry_times
 from orbatt.dataset.timeaxis import elapsed_values
 from orbatt.errors import InputError, ScenarioError
+from orbatt.methods.problem import kernel_spec
 from orbatt.scenario import parse
 from orbatt.shipped import shipped_file
+from orbatt.sweep import Sweep
 
 MODES = """[control]
 period = "1 s"
@@ -106,6 +109,36 @@ def test_until_time_and_until_settled():
     if not np.isnan(entry[2]):  # settled within 2 deg for 30 s (ticks = outputs)
         k = np.searchsorted(t, entry[2])
         assert np.all(err[k - 30:k + 1] < math.radians(2.0) + 1e-9) and mode[k] == 2
+
+
+@pytest.mark.parametrize("period", ["1 s", None])
+def test_a_mode_entered_and_left_between_two_outputs_keeps_its_entry_time(period, monkeypatch):
+    """detumble for 3 s, nadir for 2 s, then coast; outputs every 10 s: nadir lies between the
+    outputs 0 and 10 s, so no output shows it, yet its entry time (3 s) is in the Dataset, the
+    sweep output and the figures' intervals, and the sequence's state (each mode's entry) goes
+    through pause/resume and an ensemble bitwise. With a period the switches are ticks, without
+    one the located ``until_time`` knots: the same instants."""
+    from orbatt.dataset.figure_data import mode_intervals
+
+    extra = 'until_time = "2 s"\n\n[[control.modes]]\nname = "coast"\nlaw = "bdot"\n' \
+            'gain = "1 A m2 s / T"\nmax_dipole = "0.001 A m2"'
+    text = _text(extra=extra, t_end="60 s", output_step="10 s").replace(
+        'until_rate = "1 deg/s"\nhold = "20 s"', 'until_time = "3 s"')
+    if period is None:
+        text = text.replace('[control]\nperiod = "1 s"\n', "[control]\n")
+    sc = orbatt.Scenario(parse(text, "passed.toml"))
+    ds = sc.run()
+    np.testing.assert_array_equal(ds["mode"].values, [0, 2, 2, 2, 2, 2, 2])
+    np.testing.assert_array_equal(ds["mode_entry_time"].values, [0.0, 3.0, 5.0])
+    assert [(m.start, m.end, m.name) for m in mode_intervals(ds)] == [
+        (0.0, 3.0, "detumble"), (3.0, 5.0, "nadir"), (5.0, 60.0, "coast")]
+    sweep = Sweep(orbatt.Scenario(parse(
+        text + '\n[sweep]\noutputs = ["mode_entry_time"]\n[sweep.parameters]\nomega1 = { values = ["0.05 deg/s"] }\n',
+        "passed-sweep.toml")), seed=1).compute()
+    np.testing.assert_array_equal(sweep["mode_entry_time"].values, [[0.0, 3.0, 5.0]])
+    once, ens = chunked_and_ensemble_runs(sc, monkeypatch)
+    np.testing.assert_array_equal(mode_entry_times(ens.command, mode_column(
+        kernel_spec(sc.potential, [sc.body], sc.potential.control), len(sc.body.wheels)), 3), [[0.0, 3.0, 5.0]] * 2)
 
 
 def chunked_and_ensemble_runs(sc, monkeypatch):
