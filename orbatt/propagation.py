@@ -190,7 +190,9 @@ def _continued(state0, y0, z0):
         y0[:, 8:] = h
     if z is not None and z.shape[-1] != z0.size:
         raise InputError(f"state0: holds {z.shape[-1]} components of the flight software's state and this model "
-                         f"has {z0.size}; continue a run with the control law it was run with")
+                         f"has {z0.size}; continue a run with the control law it was run with (a state that an "
+                         "earlier orbatt saved, e.g. a file's `continuation`, may be laid out otherwise: a mode "
+                         "sequence now keeps each mode's entry time; then run the scenario whole)")
     carried = z is not None and z.size > 0
     return y0, (z if carried else z0), {"commands": carried, "phase": state0.phase, "stepper": state0.stepper}
 

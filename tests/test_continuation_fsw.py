@@ -160,6 +160,27 @@ def test_append_refuses_another_run(single_file, tmp_path, capsys):
     assert "holds a run of another scenario" in capsys.readouterr().err
 
 
+def test_append_refuses_a_state_laid_out_otherwise(single_file, tmp_path, capsys):
+    """A file whose ``continuation`` holds a flight-software state of another size (a file of an
+    orbatt whose mode sequence kept 4 numbers, not 4 + one entry time per mode) is refused
+    before the run, naming the cause, and the file is left as it was."""
+    import netCDF4
+
+    out = tmp_path / "old.nc"
+    out.write_bytes((single_file / "single.nc").read_bytes())
+    with netCDF4.Dataset(out, "a") as f:
+        rec = json.loads(f.getncattr("continuation"))
+        rec["y"] = rec["y"][:-2]  # the two modes' entry times
+        f.setncattr("continuation", json.dumps(rec))
+    before = out.read_bytes()
+    longer = tmp_path / "longer.toml"
+    longer.write_text(_text("6 s"))
+    assert main(["run", str(longer), "-o", str(out), "--append", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert re.search(r"components of the flight software's state.*laid out otherwise.*run the scenario whole", err)
+    assert out.read_bytes() == before
+
+
 def test_a_state_continues_from_its_own_time(single):
     sc, one = single
     state = one.state(8)  # t = 2 s: no step memory there (a fresh first step), still at its time
