@@ -336,9 +336,8 @@ def _grid_after(t, phase, period):
 
 @jit_inline
 def grid_time(t, phase, period):
-    """The tick ``phase + k period`` nearest to the time ``t``: the flight software's clock at a
-    tick whose state's time ``t`` is off by rounding (in the eccentric anomaly, the time of the
-    tick's anomaly is the tick's time to an ulp or so)."""
+    """The tick ``phase + k period`` nearest to ``t``: the flight software's clock at a tick
+    whose state's time ``t`` is off by rounding (the eccentric anomaly's: an ulp or so)."""
     return phase + math.floor((t - phase) / period + 0.5) * period
 
 
@@ -562,12 +561,9 @@ def mode_transition(s, t, y, q, omega, terms, params, table, work, r, xhat, v, j
     start of a run (its state unset), mode 0 from ``t``; on one of its ticks, leave the current
     mode for the next when its ``until_time`` has passed since it began, or when its other
     conditions (``|omega| < until_rate``; the attitude error of the mode's PD law ``<
-    until_settled``; all those given) have held for ``hold``. The state ``y[z0:]`` is
-    ``(mode, entry time, time the conditions began to hold, whether they hold)``, then each
-    mode's entry time (:mod:`orbatt.core.mode_state`); the last mode stays. Its clock is the
-    tick's own time (:func:`grid_time`), not the state's, which in the eccentric anomaly may lie
-    an ulp below it (``until_time = 3 s`` then left at 4 s). (No NaN in the state: the step
-    loop's error norm reads every component.)"""
+    until_settled``; all those given) have held for ``hold``; the last mode stays. The state:
+    :mod:`orbatt.core.mode_state` (finite: the error norm reads it). The clock is the tick's
+    own time (:func:`grid_time`), not the state's, an ulp below it in the eccentric anomaly."""
     p0 = terms[jm, P0]
     z = int(params[p0 + _CTL_Z0])
     phase, period = params[p0 + _CTL_PHASE], params[p0 + _CTL_PERIOD]
